@@ -1,0 +1,38 @@
+//! Pixel filters, images and their output (EXR, PNG).
+
+mod filter;
+mod output;
+
+pub use filter::Filter;
+pub use output::{write_exr, write_png};
+
+/// A linear-RGB image, row-major from the top row, three `f32` per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `rgb[3 * (y * width + x) + c]`.
+    pub rgb: Vec<f32>,
+}
+
+impl Image {
+    /// A black image.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            rgb: vec![0.0; 3 * width as usize * height as usize],
+        }
+    }
+    /// The colour of pixel `(x, y)`.
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        let i = 3 * (y * self.width + x) as usize;
+        [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+    }
+    /// One channel (0 = R, 1 = G, 2 = B) as a plane of `width · height` values.
+    pub fn channel(&self, c: usize) -> Vec<f32> {
+        self.rgb.iter().skip(c).step_by(3).copied().collect()
+    }
+}

@@ -1,0 +1,24 @@
+//! implicit-psdr: physically based rendering of implicit surfaces, generic over the scalar type so that
+//! the same code produces images (`f32`) and derivative images (dual numbers), following *Path-Space
+//! Differentiable Rendering of Implicit Surfaces* (Zhou et al., SIGGRAPH 2024).
+//!
+//! Data flows one way: scene file ([`scene`]) → [`scene::Scene`] (stored in `f32`) → tracer ([`trace`],
+//! `f32`) → integrand in `S: Scalar` ([`integrator`], [`bsdf`], [`emitter`], [`camera`]) → [`film`] → EXR/PNG.
+#![warn(missing_docs)]
+
+pub mod bsdf;
+pub mod camera;
+pub mod emitter;
+pub mod error;
+pub mod film;
+pub mod integrator;
+pub mod math;
+pub mod sampler;
+pub mod scalar;
+pub mod scene;
+pub mod sdf;
+pub mod trace;
+
+pub use error::{Error, Result};
+pub use math::Vec3;
+pub use scalar::{Param, Param3, Scalar};

@@ -1,0 +1,113 @@
+use super::Ray;
+use glam::Vec3;
+
+/// An axis-aligned box in `f32`, in scene units. An empty box has `min > max`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: Vec3,
+    /// Upper corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box with corners `min` and `max`.
+    #[inline]
+    pub fn new(min: Vec3, max: Vec3) -> Self {
+        Self { min, max }
+    }
+    /// The empty box (identity of [`Aabb::union`]).
+    pub const EMPTY: Self = Self {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+    /// The whole space (for unbounded shapes such as planes).
+    pub const INFINITE: Self = Self {
+        min: Vec3::splat(f32::NEG_INFINITY),
+        max: Vec3::splat(f32::INFINITY),
+    };
+    /// A cube of half-width `r` around `c`.
+    #[inline]
+    pub fn around(c: Vec3, r: Vec3) -> Self {
+        Self::new(c - r, c + r)
+    }
+    /// Smallest box holding both.
+    #[inline]
+    pub fn union(&self, o: &Self) -> Self {
+        Self::new(self.min.min(o.min), self.max.max(o.max))
+    }
+    /// Largest box inside both (possibly empty).
+    #[inline]
+    pub fn intersection(&self, o: &Self) -> Self {
+        Self::new(self.min.max(o.min), self.max.min(o.max))
+    }
+    /// Grown by `r` on every side.
+    #[inline]
+    pub fn expanded(&self, r: f32) -> Self {
+        Self::new(self.min - Vec3::splat(r), self.max + Vec3::splat(r))
+    }
+    /// True if the box holds no point.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+    /// True if every bound is finite.
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+    /// Centre of the box.
+    #[inline]
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+    /// Edge lengths.
+    #[inline]
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// True if `p` lies inside or on the box.
+    #[inline]
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+    /// The parameter interval `[t0, t1]` of `ray` inside the box, clipped to `[t_min, t_max]`, if any.
+    /// Robust to zero direction components (IEEE infinities).
+    #[inline]
+    pub fn clip(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        let inv = ray.d.recip();
+        let ta = (self.min - ray.o) * inv;
+        let tb = (self.max - ray.o) * inv;
+        let lo = ta.min(tb);
+        let hi = ta.max(tb);
+        // NaN (0 * inf, ray in a face plane) must not shrink the interval: max/min ignore NaN in glam? No,
+        // so compare explicitly.
+        let mut t0 = t_min;
+        let mut t1 = t_max;
+        for i in 0..3 {
+            if lo[i] > t0 {
+                t0 = lo[i];
+            }
+            if hi[i] < t1 {
+                t1 = hi[i];
+            }
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clip_axis_aligned_and_parallel_rays() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        assert_eq!(b.clip(&r, 0.0, f32::INFINITY), Some((4.0, 6.0)));
+        let miss = Ray::new(Vec3::new(2.0, 0.0, -5.0), Vec3::Z);
+        assert_eq!(b.clip(&miss, 0.0, f32::INFINITY), None);
+        let inside = Ray::new(Vec3::ZERO, Vec3::X);
+        assert_eq!(b.clip(&inside, 0.0, 10.0), Some((0.0, 1.0)));
+    }
+}

@@ -1,0 +1,276 @@
+//! The one generic boundary of the renderer: a project-owned [`Scalar`] trait.
+//!
+//! The same shading code runs with `f32` (the image), with forward-mode dual numbers (derivative images)
+//! and, later, with a reverse-mode tape type. num-dual's types do not implement `num_traits::Float`, so the
+//! trait is our own and small: arithmetic, a handful of elementary functions, `constant`, `primal`,
+//! `detach`, and [`Scalar::lift`], which turns a scene parameter into the scalar type.
+//!
+//! Conventions (as in num-dual): comparisons look at the primal value only. A branch taken on a primal
+//! value loses the derivative of the branch condition; where that matters a boundary term recovers it.
+
+mod dual;
+
+pub use dual::{Dual2Vec3, DualVec3};
+pub use num_dual::Dual32;
+
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// Which derivative direction a scene parameter feeds, if any.
+///
+/// `None` means the parameter is a constant for the current pass. For a one-direction dual, slot 0 is the
+/// seeded direction; for a multi-direction dual, slot `k` is the `k`-th direction; for a tape, the slot
+/// names the gradient entry.
+pub type Slot = Option<u16>;
+
+/// A real number that may carry derivatives.
+///
+/// All methods branch on primal values only. Singular operations (`sqrt` at 0, division by 0) are the
+/// caller's to guard; see [`Scalar::safe_sqrt`].
+pub trait Scalar:
+    Copy
+    + Debug
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + Add<f32, Output = Self>
+    + Sub<f32, Output = Self>
+    + Mul<f32, Output = Self>
+    + Div<f32, Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + DivAssign
+{
+    /// A constant (all derivatives zero).
+    fn constant(v: f32) -> Self;
+    /// The value without derivatives.
+    fn primal(self) -> f32;
+    /// The same value with all derivatives dropped.
+    #[inline]
+    fn detach(self) -> Self {
+        Self::constant(self.primal())
+    }
+    /// A scene parameter with value `value` lifted into this type: seeded in direction `slot` if the
+    /// type differentiates with respect to scene parameters, a constant otherwise.
+    fn lift(value: f32, slot: Slot) -> Self;
+
+    /// Square root. Its derivative is infinite at 0: use [`Scalar::safe_sqrt`] where 0 can occur.
+    fn sqrt(self) -> Self;
+    /// Natural exponential.
+    fn exp(self) -> Self;
+    /// Natural logarithm.
+    fn ln(self) -> Self;
+    /// Sine (radians).
+    fn sin(self) -> Self;
+    /// Cosine (radians).
+    fn cos(self) -> Self;
+    /// Arc tangent of `self / x` in `(-π, π]`.
+    fn atan2(self, x: Self) -> Self;
+    /// Arc cosine; the argument is clamped to `[-1, 1]` and the derivative is zero at the clamp.
+    fn acos(self) -> Self;
+    /// `self` raised to a constant power.
+    fn powf(self, n: f32) -> Self;
+
+    /// Zero.
+    #[inline]
+    fn zero() -> Self {
+        Self::constant(0.0)
+    }
+    /// One.
+    #[inline]
+    fn one() -> Self {
+        Self::constant(1.0)
+    }
+    /// `1 / self`.
+    #[inline]
+    fn recip(self) -> Self {
+        Self::one() / self
+    }
+    /// Absolute value (derivative sign chosen by the primal; 0 at 0 takes the positive branch).
+    #[inline]
+    fn abs(self) -> Self {
+        if self.primal() < 0.0 { -self } else { self }
+    }
+    /// The larger of the two by primal value (ties keep `self`).
+    #[inline]
+    fn max(self, other: Self) -> Self {
+        if other.primal() > self.primal() {
+            other
+        } else {
+            self
+        }
+    }
+    /// The smaller of the two by primal value (ties keep `self`).
+    #[inline]
+    fn min(self, other: Self) -> Self {
+        if other.primal() < self.primal() {
+            other
+        } else {
+            self
+        }
+    }
+    /// Clamp by primal value; outside the range the derivative is zero.
+    #[inline]
+    fn clamp(self, lo: f32, hi: f32) -> Self {
+        let v = self.primal();
+        if v < lo {
+            Self::constant(lo)
+        } else if v > hi {
+            Self::constant(hi)
+        } else {
+            self
+        }
+    }
+    /// `sqrt(max(self, 0))` whose derivative is zero (not infinite or NaN) where the primal is `<= 0`.
+    #[inline]
+    fn safe_sqrt(self) -> Self {
+        if self.primal() <= 0.0 {
+            Self::zero()
+        } else {
+            self.sqrt()
+        }
+    }
+    /// `self * self`.
+    #[inline]
+    fn sqr(self) -> Self {
+        self * self
+    }
+}
+
+impl Scalar for f32 {
+    #[inline(always)]
+    fn constant(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn primal(self) -> f32 {
+        self
+    }
+    #[inline(always)]
+    fn lift(value: f32, _slot: Slot) -> Self {
+        value
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        f32::exp(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        f32::ln(self)
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        f32::sin(self)
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        f32::cos(self)
+    }
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        f32::atan2(self, x)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        f32::acos(self.clamp(-1.0, 1.0))
+    }
+    #[inline(always)]
+    fn powf(self, n: f32) -> Self {
+        f32::powf(self, n)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        if other > self { other } else { self }
+    }
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        if other < self { other } else { self }
+    }
+}
+
+/// A scene parameter stored in `f32` together with the derivative slot it feeds in the current pass.
+///
+/// Rendering types hold `Param`s for every differentiable number; [`Param::get`] lifts it into any
+/// [`Scalar`]. With `f32` this is a plain load.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Param {
+    /// The value, in the units of the field it stands for.
+    pub value: f32,
+    /// The derivative direction this parameter seeds, if any.
+    pub slot: Slot,
+}
+
+impl Param {
+    /// A parameter that is not differentiated.
+    #[inline]
+    pub const fn new(value: f32) -> Self {
+        Self { value, slot: None }
+    }
+    /// The parameter lifted into `S`.
+    #[inline(always)]
+    pub fn get<S: Scalar>(&self) -> S {
+        S::lift(self.value, self.slot)
+    }
+}
+
+impl From<f32> for Param {
+    fn from(value: f32) -> Self {
+        Self::new(value)
+    }
+}
+
+/// Three parameters: a point, a vector or a linear RGB colour.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Param3 {
+    /// The components (`x, y, z` or `r, g, b`).
+    pub c: [Param; 3],
+}
+
+impl Param3 {
+    /// Three undifferentiated parameters.
+    #[inline]
+    pub const fn new(v: [f32; 3]) -> Self {
+        Self {
+            c: [Param::new(v[0]), Param::new(v[1]), Param::new(v[2])],
+        }
+    }
+    /// The primal values as a glam vector.
+    #[inline(always)]
+    pub fn value(&self) -> glam::Vec3 {
+        glam::Vec3::new(self.c[0].value, self.c[1].value, self.c[2].value)
+    }
+    /// The parameters lifted into `S`.
+    #[inline(always)]
+    pub fn get<S: Scalar>(&self) -> crate::math::Vec3<S> {
+        crate::math::Vec3::new(self.c[0].get(), self.c[1].get(), self.c[2].get())
+    }
+}
+
+impl From<glam::Vec3> for Param3 {
+    fn from(v: glam::Vec3) -> Self {
+        Self::new(v.to_array())
+    }
+}
+
+impl From<[f32; 3]> for Param3 {
+    fn from(v: [f32; 3]) -> Self {
+        Self::new(v)
+    }
+}
+
+#[cfg(test)]
+mod tests;

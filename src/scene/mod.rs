@@ -1,0 +1,201 @@
+//! The scene in `f32` (with a [`crate::Param`] for every differentiable number) and ray queries against it.
+//! Parsing lives in [`load`]; rendering types never see serde.
+
+mod json;
+
+pub use json::{load, parse};
+
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::emitter::Emitter;
+use crate::integrator::IntegratorKind;
+use crate::math::{Aabb, Ray};
+use crate::sdf::Sdf;
+use crate::trace::{ShapeTrace, TraceSettings, sphere_trace};
+
+/// An implicit surface with its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shape {
+    /// Unique name (used for parameter names and `bake --shape`).
+    pub name: String,
+    /// The implicit function.
+    pub sdf: Sdf,
+    /// The material.
+    pub bsdf: Bsdf,
+    /// Box around the surface, from [`Sdf::bounds`] (possibly infinite).
+    pub bounds: Aabb,
+    /// Lipschitz bound of the SDF, from [`Sdf::lipschitz`].
+    pub lipschitz: f32,
+}
+
+impl Shape {
+    /// A shape, with its bounds and Lipschitz bound computed from the SDF.
+    pub fn new(name: impl Into<String>, sdf: Sdf, bsdf: Bsdf) -> Self {
+        let bounds = sdf.bounds();
+        let lipschitz = sdf.lipschitz();
+        Self {
+            name: name.into(),
+            sdf,
+            bsdf,
+            bounds,
+            lipschitz,
+        }
+    }
+}
+
+/// A light source with its name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedEmitter {
+    /// Unique name.
+    pub name: String,
+    /// The emitter.
+    pub emitter: Emitter,
+}
+
+/// What a ray hits first.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Surface {
+    /// Shape `i` of [`Scene::shapes`].
+    Shape(usize),
+    /// Finite emitter `i` of [`Scene::emitters`].
+    Emitter(usize),
+}
+
+/// The first surface along a ray.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Hit point.
+    pub p: glam::Vec3,
+    /// Outward unit normal at the hit.
+    pub n: glam::Vec3,
+    /// What was hit.
+    pub surface: Surface,
+}
+
+/// Outcome of a scene query.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Intersection {
+    /// A surface was hit.
+    Hit(Hit),
+    /// Nothing was hit (the ray escapes to the environment).
+    Miss,
+    /// Some shape's sphere tracing ran out of steps and nothing nearer was hit; treated as a miss by
+    /// integrators, which count it.
+    Exhausted,
+}
+
+/// A complete scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The camera and film.
+    pub camera: Camera,
+    /// The estimator.
+    pub integrator: IntegratorKind,
+    /// Default samples per pixel.
+    pub spp: u32,
+    /// Implicit surfaces.
+    pub shapes: Vec<Shape>,
+    /// Light sources.
+    pub emitters: Vec<NamedEmitter>,
+    /// Tracer tolerances, set from the scene scale.
+    pub trace: TraceSettings,
+    /// Indices of finite emitters in [`Scene::emitters`] (tested by rays).
+    pub finite_emitters: Vec<usize>,
+    /// Index of the environment emitter, if any (at most one).
+    pub environment: Option<usize>,
+}
+
+/// Relative hit tolerance: `eps = RELATIVE_EPS · scene scale`.
+pub const RELATIVE_EPS: f32 = 1e-5;
+
+impl Scene {
+    /// Assembles a scene and derives the tracer tolerance from its scale (the extent of the finite
+    /// shape bounds, emitters and camera).
+    pub fn new(
+        camera: Camera,
+        integrator: IntegratorKind,
+        spp: u32,
+        shapes: Vec<Shape>,
+        emitters: Vec<NamedEmitter>,
+    ) -> Self {
+        let mut extent = Aabb::around(camera.origin.value(), glam::Vec3::ZERO);
+        for s in &shapes {
+            if s.bounds.is_finite() {
+                extent = extent.union(&s.bounds);
+            }
+        }
+        let finite_emitters: Vec<usize> = (0..emitters.len())
+            .filter(|&i| !emitters[i].emitter.is_infinite())
+            .collect();
+        let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
+        let scale = extent.extent().max_element().max(1e-3);
+        let trace = TraceSettings {
+            eps: RELATIVE_EPS * scale,
+            ..TraceSettings::default()
+        };
+        Self {
+            camera,
+            integrator,
+            spp,
+            shapes,
+            emitters,
+            trace,
+            finite_emitters,
+            environment,
+        }
+    }
+
+    /// The first surface hit by `ray` in `(0, t_max)`.
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Intersection {
+        let mut best_t = t_max;
+        let mut best: Option<Surface> = None;
+        let mut best_n = glam::Vec3::ZERO;
+        let mut exhausted = false;
+        for &i in &self.finite_emitters {
+            if let Some((t, n)) = self.emitters[i].emitter.intersect(ray, best_t) {
+                best_t = t;
+                best = Some(Surface::Emitter(i));
+                best_n = n;
+            }
+        }
+        for (i, shape) in self.shapes.iter().enumerate() {
+            let Some((t0, t1)) = shape.bounds.clip(ray, 0.0, best_t) else {
+                continue;
+            };
+            match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
+                ShapeTrace::Hit(t) if t < best_t => {
+                    best_t = t;
+                    best = Some(Surface::Shape(i));
+                }
+                ShapeTrace::Exhausted(_) => exhausted = true,
+                _ => {}
+            }
+        }
+        match best {
+            Some(surface) => {
+                let p = ray.at(best_t);
+                let n = match surface {
+                    Surface::Shape(i) => self.shapes[i].sdf.normal(p),
+                    Surface::Emitter(_) => best_n,
+                };
+                Intersection::Hit(Hit {
+                    t: best_t,
+                    p,
+                    n,
+                    surface,
+                })
+            }
+            None if exhausted => Intersection::Exhausted,
+            None => Intersection::Miss,
+        }
+    }
+
+    /// Origin offset that moves a ray start off the surface at `p` with normal `n`, towards `w`.
+    #[inline]
+    pub fn offset_origin(&self, p: glam::Vec3, n: glam::Vec3, w: glam::Vec3) -> glam::Vec3 {
+        let side = if n.dot(w) >= 0.0 { 1.0 } else { -1.0 };
+        p + n * (side * 4.0 * self.trace.eps)
+    }
+}
