@@ -25,7 +25,7 @@ pub(super) const SMIN_MAX_LOWERING: f32 = 1.0 / 6.0;
 pub(super) fn smin<S: Scalar>(a: S, b: S, k: S) -> S {
     let kp = k.primal();
     let m = a.min(b);
-    if !(kp > 0.0) {
+    if kp.is_nan() || kp <= 0.0 {
         return m;
     }
     let s = (a - b).abs();

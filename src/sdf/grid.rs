@@ -9,7 +9,7 @@
 //! Edges: the lattice is extended by one ghost layer per face with *linear extrapolation*
 //! (`c_{−1} = 2c_0 − c_1`, `c_n = 2c_{n−1} − c_{n−2}`), folded into the weights. The spline stays C2 up
 //! to the faces, still reproduces linear fields (no `O(h)` bias at the faces, unlike clamping the
-//! indices), and the differences `c_{i+1} − c_i` are the same set, so the Lipschitz bound is unchanged.
+//! indices). The Lipschitz bound takes the extended lattice's differences (see `axis_lipschitz`).
 //!
 //! Outside the box: `φ(x) = φ(clamp(x)) + |x − clamp(x)|`, a valid bound for sphere tracing.
 
@@ -158,22 +158,58 @@ pub(super) fn eval<S: Scalar>(
     spline(data, bmin, bmax, q) + (p - q).length()
 }
 
-/// Per-axis bounds `L_a = max |c_{i+1} − c_i| / h_a` on the spline's partial derivatives.
+/// The control point at extended lattice index `(x, y, z)`, each in `−1..=n`: ghost layers by linear
+/// extrapolation along every axis that is out of range (bilinear and trilinear at ghost edges and corners).
+fn extended(data: &GridData, x: isize, y: isize, z: isize) -> f32 {
+    let [nx, ny, nz] = data.dims.map(|n| n as isize);
+    if x < 0 {
+        return 2.0 * extended(data, 0, y, z) - extended(data, 1, y, z);
+    }
+    if x >= nx {
+        return 2.0 * extended(data, nx - 1, y, z) - extended(data, nx - 2, y, z);
+    }
+    if y < 0 {
+        return 2.0 * extended(data, x, 0, z) - extended(data, x, 1, z);
+    }
+    if y >= ny {
+        return 2.0 * extended(data, x, ny - 1, z) - extended(data, x, ny - 2, z);
+    }
+    if z < 0 {
+        return 2.0 * extended(data, x, y, 0) - extended(data, x, y, 1);
+    }
+    if z >= nz {
+        return 2.0 * extended(data, x, y, nz - 1) - extended(data, x, y, nz - 2);
+    }
+    data.at(x as usize, y as usize, z as usize)
+}
+
+/// Per-axis bounds `L_a = max |c_{i+1} − c_i| / h_a` over the ghost-extended lattice. Along axis `a` the
+/// ghost differences repeat the first and last ones, but the ghost layers of the *other* axes carry
+/// extrapolated differences (`2Δ_0 − Δ_1`), which can be larger: they are included.
 fn axis_lipschitz(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> [f32; 3] {
     let [nx, ny, nz] = data.dims;
     let mut m = [0.0f32; 3];
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                let c = data.at(x, y, z);
-                if x + 1 < nx {
-                    m[0] = m[0].max((data.at(x + 1, y, z) - c).abs());
+    let ghost = |i: usize, n: usize| i == 0 || i == n + 1;
+    // Interior points (no ghost index) read the array directly; only ghost layers recurse.
+    let value = |x: usize, y: usize, z: usize| {
+        if ghost(x, nx) || ghost(y, ny) || ghost(z, nz) {
+            extended(data, x as isize - 1, y as isize - 1, z as isize - 1)
+        } else {
+            data.at(x - 1, y - 1, z - 1)
+        }
+    };
+    for z in 0..nz + 2 {
+        for y in 0..ny + 2 {
+            for x in 0..nx + 2 {
+                let c = value(x, y, z);
+                if x + 1 < nx + 2 {
+                    m[0] = m[0].max((value(x + 1, y, z) - c).abs());
                 }
-                if y + 1 < ny {
-                    m[1] = m[1].max((data.at(x, y + 1, z) - c).abs());
+                if y + 1 < ny + 2 {
+                    m[1] = m[1].max((value(x, y + 1, z) - c).abs());
                 }
-                if z + 1 < nz {
-                    m[2] = m[2].max((data.at(x, y, z + 1) - c).abs());
+                if z + 1 < nz + 2 {
+                    m[2] = m[2].max((value(x, y, z + 1) - c).abs());
                 }
             }
         }

@@ -250,7 +250,7 @@ impl Sdf {
     pub fn normal_curvature(&self, p: glam::Vec3, omega: glam::Vec3) -> f32 {
         let (_, g, h) = self.hessian(p);
         let gl = g.length();
-        if !(gl > 1e-12) {
+        if gl.is_nan() || gl <= 1e-12 {
             return 0.0;
         }
         let k = omega.dot(h * omega) / gl;
@@ -260,7 +260,7 @@ impl Sdf {
     /// A box holding the whole surface and interior (`φ ≤ 0`); [`Aabb::INFINITE`] for unbounded nodes.
     ///
     /// Unions unite boxes, intersections intersect them, a difference keeps its first child's box, a
-    /// smooth union grows the union by its blend ([`csg`]'s notes), a transform boxes the eight mapped
+    /// smooth union grows the union by its blend (by `k`, see the smooth-minimum notes in the source), a transform boxes the eight mapped
     /// corners, a grid is its box grown by any negative face value.
     pub fn bounds(&self) -> Aabb {
         match self {
@@ -328,7 +328,7 @@ impl Sdf {
 /// `κ = (tr H − gᵀHg/|g|²)/|g|`, guarded: 0 where `|g|` vanishes or the result is not finite.
 fn curvature_from(g: glam::Vec3, h: glam::Mat3) -> f32 {
     let g2 = g.length_squared();
-    if !(g2 > 1e-24) {
+    if g2.is_nan() || g2 <= 1e-24 {
         return 0.0;
     }
     let tr = h.x_axis.x + h.y_axis.y + h.z_axis.z;
