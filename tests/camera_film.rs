@@ -113,8 +113,8 @@ fn film_area_jacobian_matches_projected_patches() {
         let tilt = 1.3 * u.x;
         let fr = implicit_psdr::math::Frame::from_normal(-ray.d);
         let n = fr.to_world(Vec3::new(
-            tilt.sin() * (6.28 * u.y).cos(),
-            tilt.sin() * (6.28 * u.y).sin(),
+            tilt.sin() * (std::f32::consts::TAU * u.y).cos(),
+            tilt.sin() * (std::f32::consts::TAU * u.y).sin(),
             tilt.cos(),
         ));
         let h = 0.02;
