@@ -18,7 +18,7 @@ use crate::math::sampling::power_heuristic;
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::Scalar;
-use crate::scene::{Intersection, Scene, Surface};
+use crate::scene::{Hit, Intersection, Scene, Surface};
 use crate::trace::{ShapeTrace, sphere_trace};
 
 /// What a recorded vertex lies on.
@@ -110,6 +110,52 @@ pub fn occluded(
         }
     }
     false
+}
+
+/// What a ray sees, when only emission along it matters (the last segment of a path).
+enum Next {
+    /// The first surface along the ray.
+    Surface(Hit),
+    /// Nothing: the ray escapes to the environment (if any).
+    Escape,
+    /// Something that does not emit blocks the ray.
+    Blocked,
+}
+
+/// The nearest emitter along `ray`, tested for occlusion by shapes; shapes are traced only up to the
+/// emitter, or not at all when no emitter is hit and the scene has no environment (a segment that can
+/// carry no light costs no sphere tracing). Equivalent to [`Scene::intersect`] followed by discarding
+/// shape hits.
+fn emission_along(scene: &Scene, ray: &Ray, counters: &mut TraceCounters) -> Next {
+    let mut best: Option<(f32, glam::Vec3, usize)> = None;
+    for &i in &scene.finite_emitters {
+        let t_max = best.map_or(f32::INFINITY, |b| b.0);
+        if let Some((t, n)) = scene.emitters[i].emitter.intersect(ray, t_max) {
+            best = Some((t, n, i));
+        }
+    }
+    match best {
+        Some((t, n, i)) => {
+            if occluded(scene, ray, t, Some(i), counters) {
+                Next::Blocked
+            } else {
+                Next::Surface(Hit {
+                    t,
+                    p: ray.at(t),
+                    n,
+                    surface: Surface::Emitter(i),
+                })
+            }
+        }
+        None if scene.environment.is_none() => Next::Blocked,
+        None => {
+            if occluded(scene, ray, f32::INFINITY, None, counters) {
+                Next::Blocked
+            } else {
+                Next::Escape
+            }
+        }
+    }
 }
 
 /// Density per steradian, including the selection probability, with which next-event estimation from
@@ -205,13 +251,23 @@ pub fn trace_path(
     let mut prev = ray.o;
     let mut scatter = 0;
     loop {
-        let hit = match scene.intersect(&ray, f32::INFINITY) {
-            Intersection::Hit(h) => Some(h),
-            Intersection::Miss => None,
-            Intersection::Exhausted => {
-                counters.exhausted += 1;
-                None
+        // After the last scattering vertex only emission along the ray counts.
+        let next = if scatter >= max_scatter {
+            emission_along(scene, &ray, counters)
+        } else {
+            match scene.intersect(&ray, f32::INFINITY) {
+                Intersection::Hit(h) => Next::Surface(h),
+                Intersection::Miss => Next::Escape,
+                Intersection::Exhausted => {
+                    counters.exhausted += 1;
+                    Next::Escape
+                }
             }
+        };
+        let hit = match next {
+            Next::Surface(h) => Some(h),
+            Next::Escape => None,
+            Next::Blocked => return,
         };
         let Some(h) = hit else {
             if let Some(env) = scene.environment {
