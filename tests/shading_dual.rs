@@ -409,3 +409,115 @@ fn sphere_emitter_far_away_keeps_precision() {
     assert_close(omega, exact, 1e-3, "far sphere solid angle");
     assert!((s.p - G3::new(0.0, 0.0, 1000.0)).length() < 0.0101);
 }
+
+/// The recorded-path contribution evaluated with dual numbers: the estimate is linear in the light's
+/// radiance and in the albedo, so its derivatives equal value / parameter; moving the shading point
+/// matches a central difference of the `f32` evaluation of the same record.
+#[test]
+fn path_contribution_dual_matches_central_difference() {
+    use implicit_psdr::camera::Camera;
+    use implicit_psdr::film::Filter;
+    use implicit_psdr::integrator::IntegratorKind;
+    use implicit_psdr::integrator::path::{
+        LightVertex, PathRecord, PathVertex, VertexKind, contribution, detached,
+    };
+    use implicit_psdr::math::Aabb;
+    use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
+    use implicit_psdr::sdf::Sdf;
+
+    let scene_with = |radiance: Param3, albedo: Param3| {
+        let camera = Camera {
+            origin: Param3::new([0.0, 1.0, 2.0]),
+            target: Param3::new([0.0; 3]),
+            up: Param3::new([0.0, 1.0, 0.0]),
+            fov_y: Param::new(40.0),
+            width: 4,
+            height: 4,
+            filter: Filter::Tent,
+        };
+        let light = Emitter::Rectangle {
+            center: Param3::new([0.3, 2.0, 0.1]),
+            normal: -G3::Y,
+            u: G3::X,
+            size: [Param::new(1.0), Param::new(0.5)],
+            radiance,
+        };
+        let mut scene = Scene::new(
+            camera,
+            IntegratorKind::Direct,
+            1,
+            vec![],
+            vec![NamedEmitter {
+                name: "light".into(),
+                emitter: light,
+            }],
+        );
+        scene.shapes.push(Shape {
+            name: "patch".into(),
+            sdf: Sdf::Sphere {
+                center: Param3::new([0.0, -10.0, 0.0]),
+                radius: Param::new(0.1),
+            },
+            bsdf: Bsdf::Diffuse { albedo },
+            bounds: Aabb::around(G3::new(0.0, -10.0, 0.0), G3::splat(0.1)),
+            lipschitz: 1.0,
+        });
+        scene
+    };
+    let (l, rho) = ([3.0, 2.0, 1.0], [0.5, 0.6, 0.7]);
+    let record = PathRecord {
+        camera: G3::new(0.0, 1.0, 2.0),
+        vertices: vec![PathVertex {
+            p: G3::ZERO,
+            n: G3::Y,
+            kind: VertexKind::Shape(0),
+            pdf: 1.0,
+            mis: 0.0,
+        }],
+        lights: vec![LightVertex {
+            from: 0,
+            emitter: 0,
+            p: G3::new(0.5, 2.0, 0.2),
+            n: -G3::Y,
+            pdf: 1.7,
+            mis: 0.8,
+        }],
+    };
+    let plain = scene_with(Param3::new(l), Param3::new(rho));
+    let value = contribution::<f32>(&plain, &record, detached);
+    assert!(value.x > 0.0);
+    for k in 0..3 {
+        let mut lp = Param3::new(l);
+        lp.c[k].slot = Some(0);
+        let d = contribution::<Dual32>(&scene_with(lp, Param3::new(rho)), &record, detached);
+        assert_close(d.get(k).eps, value.get(k) / l[k], 1e-5, "d/dL");
+        let mut rp = Param3::new(rho);
+        rp.c[k].slot = Some(0);
+        let d = contribution::<Dual32>(&scene_with(Param3::new(l), rp), &record, detached);
+        assert_close(d.get(k).eps, value.get(k) / rho[k], 1e-5, "d/drho");
+    }
+    // Attach the shading point: x(π) = p + π e_k (a rigid translation of that vertex only).
+    let h = 1e-3;
+    for k in 0..3 {
+        let e = G3::AXES[k];
+        let attach = |p: G3, n: G3| -> (Vec3<Dual32>, Vec3<Dual32>) {
+            let mut x: Vec3<Dual32> = Vec3::constant(p);
+            if p == G3::ZERO {
+                x = x + lift_component([0.0; 3], k);
+            }
+            (x, Vec3::constant(n))
+        };
+        let d = contribution::<Dual32>(&plain, &record, attach);
+        let at = |s: f32| {
+            let mut r = record.clone();
+            r.vertices[0].p += e * s;
+            contribution::<f32>(&plain, &r, detached).x
+        };
+        let fd = (at(h) - at(-h)) / (2.0 * h);
+        assert!(
+            (d.x.eps - fd).abs() < 2e-3 * (1.0 + fd.abs()),
+            "d/dx_{k}: {} vs {fd}",
+            d.x.eps
+        );
+    }
+}
