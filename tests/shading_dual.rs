@@ -503,7 +503,7 @@ fn path_contribution_dual_matches_central_difference() {
         let attach = |p: G3, n: G3| -> (Vec3<Dual32>, Vec3<Dual32>) {
             let mut x: Vec3<Dual32> = Vec3::constant(p);
             if p == G3::ZERO {
-                x = x + lift_component([0.0; 3], k);
+                x += lift_component([0.0; 3], k);
             }
             (x, Vec3::constant(n))
         };
