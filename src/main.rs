@@ -39,15 +39,15 @@ enum Command {
         #[arg(long, default_value = "out.png")]
         png: PathBuf,
     },
-    /// Sample one shape's SDF over its (padded) bounds into a grid and write it as a float32 .npy of
-    /// shape [res, res, res] (z, y, x).
+    /// Sample one shape's SDF over its bounds (padded) into a grid and write it as a float32 .npy of
+    /// shape [nz, ny, nx].
     Bake {
         /// The scene file holding the shape.
         scene: PathBuf,
         /// Name of the shape to bake.
         #[arg(long)]
         shape: String,
-        /// Samples along each axis (4 to 512).
+        /// Samples along the longest edge of the box (4 to 512); the other axes get near-cubic cells.
         #[arg(long, value_parser = clap::value_parser!(u32).range(4..=512))]
         res: u32,
         /// Output .npy file.
@@ -167,17 +167,17 @@ fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
             "--shape: shape {name:?} is unbounded (e.g. a plane), it cannot be baked into a grid"
         );
     }
-    // A cube around the padded bounds: cells stay cubic, so the grid's Lipschitz bound is isotropic.
-    let half = 0.5 * shape.bounds.extent().max_element() * (1.0 + 2.0 * BAKE_PADDING);
-    let center = shape.bounds.center();
-    let (bbox_min, bbox_max) = (
-        center - glam::Vec3::splat(half),
-        center + glam::Vec3::splat(half),
-    );
+    // Padding keeps a few cells between the surface and the box, where the B-spline reconstruction
+    // is accurate; sdf::bake puts `res` samples along the longest edge and near-cubic cells elsewhere.
+    let padded = shape
+        .bounds
+        .expanded(BAKE_PADDING * shape.bounds.extent().max_element());
+    let (bbox_min, bbox_max) = (padded.min, padded.max);
     let grid = sdf::bake(&shape.sdf, bbox_min, bbox_max, res);
     sdf::write_npy(out, &grid)?;
+    let [nx, ny, nz] = grid.dims;
     println!(
-        "wrote {} ({res}^3 samples); use it as\n  {{\"type\": \"grid\", \"file\": \"{}\", \"bbox_min\": [{}, {}, {}], \"bbox_max\": [{}, {}, {}]}}",
+        "wrote {} ({nx} x {ny} x {nz} samples, x y z); use it as\n  {{\"type\": \"grid\", \"file\": \"{}\", \"bbox_min\": [{}, {}, {}], \"bbox_max\": [{}, {}, {}]}}",
         out.display(),
         out.display(),
         bbox_min.x,

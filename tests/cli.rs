@@ -180,7 +180,7 @@ fn bad_grid_files() {
     assert_render_fails(
         "grid-dtype",
         &text,
-        &[("g.npy", &npy("<f8", &[8, 8, 8], 8))],
+        &[("g.npy", &npy("<i4", &[8, 8, 8], 4))],
         "shapes[0].sdf.file: grid file",
     );
     assert_render_fails(

@@ -575,7 +575,7 @@ fn bad_grid_files_name_field_and_file() {
     let dir = std::env::temp_dir().join(format!("psdr-grid-parse-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let cases: Vec<(&str, &str, Vec<usize>, Vec<u8>)> = vec![
-        ("f64.npy", "<f8", vec![4, 4, 4], vec![0u8; 8 * 64]),
+        ("i32.npy", "<i4", vec![4, 4, 4], vec![0u8; 4 * 64]),
         ("flat.npy", "<f4", vec![64], vec![0u8; 4 * 64]),
         ("tiny.npy", "<f4", vec![3, 3, 3], vec![0u8; 4 * 27]),
         ("short.npy", "<f4", vec![8, 8, 8], vec![0u8; 4 * 100]),
