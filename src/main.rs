@@ -58,7 +58,30 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    // A panic is a bug, but the contract of the tool still holds: one line on stderr (the first panic
+    // only: rayon workers may panic together), exit code 2, no output file (outputs are written last).
+    std::panic::set_hook(Box::new(|info| {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            let message = info.to_string().replace('\n', " ");
+            eprintln!("error: internal error (please report): {message}");
+        });
+    }));
+    let Ok(result) = std::panic::catch_unwind(|| run(cli)) else {
+        return ExitCode::from(2);
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // `{:#}` joins the context chain on one line: "scene.json: shapes[0].sdf.radius: ...".
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
         Command::Render {
             scene,
             spp,
@@ -72,14 +95,6 @@ fn main() -> ExitCode {
             res,
             out,
         } => bake(&scene, &shape, res as usize, &out),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            // `{:#}` joins the context chain on one line: "scene.json: shapes[0].sdf.radius: ...".
-            eprintln!("error: {e:#}");
-            ExitCode::from(2)
-        }
     }
 }
 
