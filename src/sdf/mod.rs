@@ -7,8 +7,19 @@
 //! [`crate::scalar::DualVec3`], Hessians with [`crate::scalar::Dual2Vec3`] and parameter derivatives with
 //! `Dual32`.
 
+mod bake;
+mod csg;
+mod grid;
+mod npy;
+mod primitives;
+mod transform;
+
+pub use bake::{bake, bake_dims};
+pub use npy::{read_npy, write_npy};
+
+use crate::error::Result;
 use crate::math::{Aabb, Vec3};
-use crate::scalar::{Param, Param3, Scalar};
+use crate::scalar::{Dual2Vec3, DualVec3, Param, Param3, Scalar};
 use std::sync::Arc;
 
 /// Values of a grid SDF: `nx · ny · nz` samples, x fastest (the layout of a C-order `.npy` of shape
@@ -87,7 +98,8 @@ pub enum Sdf {
     Intersection(Vec<Sdf>),
     /// The first child minus all others.
     Difference(Vec<Sdf>),
-    /// Smooth union with blending radius `k` (polynomial smooth minimum, C1; k > 0).
+    /// Smooth union with blending radius `k`: the cubic polynomial smooth minimum (C2, at most `k/6` below
+    /// the minimum, equal to it where the children differ by more than `k`), folded over the children.
     SmoothUnion {
         /// Children (at least one).
         children: Vec<Sdf>,
@@ -120,19 +132,47 @@ pub enum Sdf {
 
 impl Sdf {
     /// `φ(p)`, generic over the scalar type.
+    ///
+    /// Allocation-free; with `f32` this is the sphere tracer's inner loop.
     pub fn eval<S: Scalar>(&self, p: Vec3<S>) -> S {
         match self {
-            Sdf::Sphere { center, radius } => (p - center.get::<S>()).length() - radius.get::<S>(),
+            Sdf::Sphere { center, radius } => primitives::sphere(p, center, radius),
             Sdf::Box {
                 center,
                 half_size,
                 rounding,
-            } => {
-                let r = rounding.get::<S>();
-                let q = (p - center.get::<S>()).abs() - half_size.get::<S>() + Vec3::splat(r);
-                q.max_f32(0.0).length() + q.max_element().min(S::zero()) - r
-            }
-            _ => todo!("sdf: remaining nodes"),
+            } => primitives::cuboid(p, center, half_size, rounding),
+            Sdf::Torus {
+                center,
+                axis,
+                major_radius,
+                minor_radius,
+            } => primitives::torus(p, center, *axis, major_radius, minor_radius),
+            Sdf::Cylinder {
+                center,
+                axis,
+                radius,
+                half_height,
+                rounding,
+            } => primitives::cylinder(p, center, *axis, radius, half_height, rounding),
+            Sdf::Capsule { a, b, radius } => primitives::capsule(p, a, b, radius),
+            Sdf::Plane { normal, offset } => primitives::plane(p, *normal, offset),
+            Sdf::Union(children) => csg::union(children, p),
+            Sdf::Intersection(children) => csg::intersection(children, p),
+            Sdf::Difference(children) => csg::difference(children, p),
+            Sdf::SmoothUnion { children, k } => csg::smooth_union(children, k.get::<S>(), p),
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                child,
+            } => transform::eval(p, translate, *axis, angle, scale, child),
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+            } => grid::eval(data, *bbox_min, *bbox_max, p),
         }
     }
 
@@ -142,10 +182,35 @@ impl Sdf {
         self.eval::<f32>(p.into())
     }
 
-    /// `∇φ(p)` (not normalised).
+    /// `∇φ(p)` (not normalised), by forward-mode AD ([`DualVec3`]), with analytic fast paths for the
+    /// sphere and the box. Zero (never NaN) where `φ` is not differentiable in a way `safe_sqrt` guards,
+    /// e.g. at a sphere's centre.
     pub fn gradient(&self, p: glam::Vec3) -> glam::Vec3 {
-        let _ = p;
-        todo!("sdf: gradient")
+        match self {
+            Sdf::Sphere { center, .. } => {
+                // ∇|p − c| = (p − c)/|p − c|; zero at the centre, as AD with safe_sqrt gives.
+                (p - center.value()).normalize_or_zero()
+            }
+            Sdf::Box {
+                center,
+                half_size,
+                rounding,
+            } => box_gradient(p - center.value(), half_size.value(), rounding.value),
+            _ => self.ad_gradient(p),
+        }
+    }
+
+    /// `∇φ(p)` by forward-mode AD, for every node (the reference the fast paths are tested against).
+    pub fn ad_gradient(&self, p: glam::Vec3) -> glam::Vec3 {
+        let v = self.eval(Vec3::new(
+            DualVec3::from_re(p.x).derivative(0),
+            DualVec3::from_re(p.y).derivative(1),
+            DualVec3::from_re(p.z).derivative(2),
+        ));
+        match v.eps.0 {
+            Some(g) => glam::Vec3::new(g[0], g[1], g[2]),
+            None => glam::Vec3::ZERO,
+        }
     }
 
     /// Outward unit normal `∇φ/|∇φ|`; `+z` where the gradient vanishes.
@@ -153,19 +218,250 @@ impl Sdf {
         self.gradient(p).try_normalize().unwrap_or(glam::Vec3::Z)
     }
 
-    /// Total curvature `κ = ∇·n` at `p` (sum of principal curvatures; positive on convex surfaces).
+    /// Value, gradient and Hessian at `p` by second-order forward AD ([`Dual2Vec3`]).
+    pub fn hessian(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
+        let v = self.eval(Vec3::new(
+            Dual2Vec3::from_re(p.x).derivative(0),
+            Dual2Vec3::from_re(p.y).derivative(1),
+            Dual2Vec3::from_re(p.z).derivative(2),
+        ));
+        let g =
+            v.v1.0
+                .map_or(glam::Vec3::ZERO, |g| glam::Vec3::new(g[0], g[1], g[2]));
+        let h = v.v2.0.map_or(glam::Mat3::ZERO, |h| {
+            glam::Mat3::from_cols_array_2d(&std::array::from_fn(|c| {
+                std::array::from_fn(|r| h[(r, c)])
+            }))
+        });
+        (v.re, g, h)
+    }
+
+    /// Total curvature `κ = ∇·n = (tr H − nᵀHn)/|∇φ|` of the level set through `p` (sum of principal
+    /// curvatures; positive on convex surfaces). Zero where the gradient vanishes or the result is not
+    /// finite.
     pub fn curvature(&self, p: glam::Vec3) -> f32 {
-        let _ = p;
-        todo!("sdf: curvature")
+        let (_, g, h) = self.hessian(p);
+        curvature_from(g, h)
+    }
+
+    /// Normal curvature `κ_n(ω) = ωᵀHω/|∇φ|` along the tangent direction `ω` (unit, `ω·n = 0`): the
+    /// curvature of the surface's section along `ω`, positive where the surface curves away from `ω`
+    /// (convex). Zero where the gradient vanishes.
+    pub fn normal_curvature(&self, p: glam::Vec3, omega: glam::Vec3) -> f32 {
+        let (_, g, h) = self.hessian(p);
+        let gl = g.length();
+        if gl.is_nan() || gl <= 1e-12 {
+            return 0.0;
+        }
+        let k = omega.dot(h * omega) / gl;
+        if k.is_finite() { k } else { 0.0 }
     }
 
     /// A box holding the whole surface and interior (`φ ≤ 0`); [`Aabb::INFINITE`] for unbounded nodes.
+    ///
+    /// Unions unite boxes, intersections intersect them, a difference keeps its first child's box, a
+    /// smooth union grows the union by its blend (by `k`, see the smooth-minimum notes in the source), a transform boxes the eight mapped
+    /// corners, a grid is its box grown by any negative face value.
     pub fn bounds(&self) -> Aabb {
-        todo!("sdf: bounds")
+        match self {
+            Sdf::Sphere { center, radius } => primitives::sphere_bounds(center, radius),
+            Sdf::Box {
+                center, half_size, ..
+            } => primitives::cuboid_bounds(center, half_size),
+            Sdf::Torus {
+                center,
+                axis,
+                major_radius,
+                minor_radius,
+            } => primitives::torus_bounds(center, *axis, major_radius, minor_radius),
+            Sdf::Cylinder {
+                center,
+                axis,
+                radius,
+                half_height,
+                ..
+            } => primitives::cylinder_bounds(center, *axis, radius, half_height),
+            Sdf::Capsule { a, b, radius } => primitives::capsule_bounds(a, b, radius),
+            Sdf::Plane { .. } => Aabb::INFINITE,
+            Sdf::Union(children) => csg::union_bounds(children),
+            Sdf::Intersection(children) => csg::intersection_bounds(children),
+            Sdf::Difference(children) => children.first().map_or(Aabb::EMPTY, Sdf::bounds),
+            Sdf::SmoothUnion { children, k } => csg::smooth_union_bounds(children, k.value),
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                child,
+            } => transform::bounds(translate, *axis, angle, scale, child),
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+            } => grid::bounds(data, *bbox_min, *bbox_max),
+        }
     }
 
     /// An upper bound on `|∇φ|` everywhere: sphere tracing steps by `φ / L`.
+    ///
+    /// 1 for the primitives (exact distances; `|n|` for a plane), the largest child's for CSG and smooth
+    /// unions (min, max and the smooth min's convex weights keep it), the child's for a transform (the
+    /// scale cancels), the spline's exact bound for a grid.
     pub fn lipschitz(&self) -> f32 {
-        todo!("sdf: lipschitz")
+        match self {
+            Sdf::Plane { normal, .. } => normal.length().max(1.0),
+            Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
+                csg::max_lipschitz(children)
+            }
+            Sdf::SmoothUnion { children, .. } => csg::max_lipschitz(children),
+            Sdf::Transform { child, .. } => child.lipschitz(),
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+            } => grid::lipschitz(data, *bbox_min, *bbox_max),
+            _ => 1.0,
+        }
+    }
+}
+
+/// `κ = (tr H − gᵀHg/|g|²)/|g|`, guarded: 0 where `|g|` vanishes or the result is not finite.
+fn curvature_from(g: glam::Vec3, h: glam::Mat3) -> f32 {
+    let g2 = g.length_squared();
+    if g2.is_nan() || g2 <= 1e-24 {
+        return 0.0;
+    }
+    let tr = h.x_axis.x + h.y_axis.y + h.z_axis.z;
+    let k = (tr - g.dot(h * g) / g2) / g2.sqrt();
+    if k.is_finite() { k } else { 0.0 }
+}
+
+/// Analytic gradient of the rounded box at `d = p − center`, branch for branch as [`Sdf::eval`] (and so
+/// as AD): outside the shrunk box, the direction from its closest point; inside, the axis of the largest
+/// `q_i` (ties to the lower axis, as `max_element`), signed by `d` (the positive branch at 0, as `abs`).
+fn box_gradient(d: glam::Vec3, half_size: glam::Vec3, rounding: f32) -> glam::Vec3 {
+    let sign = glam::Vec3::select(d.cmplt(glam::Vec3::ZERO), -glam::Vec3::ONE, glam::Vec3::ONE);
+    let q = d.abs() - half_size + glam::Vec3::splat(rounding);
+    let (mut axis, mut m) = (0, q.x);
+    if q.y > m {
+        (axis, m) = (1, q.y);
+    }
+    if q.z > m {
+        (axis, m) = (2, q.z);
+    }
+    if m > 0.0 {
+        q.max(glam::Vec3::ZERO).normalize_or_zero() * sign
+    } else {
+        let mut g = glam::Vec3::ZERO;
+        g[axis] = sign[axis];
+        g
+    }
+}
+
+/// Convenience constructors: plain values in, [`Param`]s (undifferentiated) out; axes normalised.
+impl Sdf {
+    /// A sphere.
+    pub fn sphere(center: impl Into<Param3>, radius: impl Into<Param>) -> Self {
+        Sdf::Sphere {
+            center: center.into(),
+            radius: radius.into(),
+        }
+    }
+    /// A box with half extents `half_size`, edges rounded by `rounding` (outer extents kept).
+    pub fn cuboid(
+        center: impl Into<Param3>,
+        half_size: impl Into<Param3>,
+        rounding: impl Into<Param>,
+    ) -> Self {
+        Sdf::Box {
+            center: center.into(),
+            half_size: half_size.into(),
+            rounding: rounding.into(),
+        }
+    }
+    /// A torus about `axis` (normalised; `+z` if zero).
+    pub fn torus(
+        center: impl Into<Param3>,
+        axis: glam::Vec3,
+        major_radius: impl Into<Param>,
+        minor_radius: impl Into<Param>,
+    ) -> Self {
+        Sdf::Torus {
+            center: center.into(),
+            axis: axis.try_normalize().unwrap_or(glam::Vec3::Z),
+            major_radius: major_radius.into(),
+            minor_radius: minor_radius.into(),
+        }
+    }
+    /// A capped cylinder about `axis` (normalised; `+z` if zero), rims rounded by `rounding`.
+    pub fn cylinder(
+        center: impl Into<Param3>,
+        axis: glam::Vec3,
+        radius: impl Into<Param>,
+        half_height: impl Into<Param>,
+        rounding: impl Into<Param>,
+    ) -> Self {
+        Sdf::Cylinder {
+            center: center.into(),
+            axis: axis.try_normalize().unwrap_or(glam::Vec3::Z),
+            radius: radius.into(),
+            half_height: half_height.into(),
+            rounding: rounding.into(),
+        }
+    }
+    /// A capsule around the segment `a`–`b`.
+    pub fn capsule(a: impl Into<Param3>, b: impl Into<Param3>, radius: impl Into<Param>) -> Self {
+        Sdf::Capsule {
+            a: a.into(),
+            b: b.into(),
+            radius: radius.into(),
+        }
+    }
+    /// The half-space `normal·p ≤ offset` (`normal` normalised; `+z` if zero).
+    pub fn plane(normal: glam::Vec3, offset: impl Into<Param>) -> Self {
+        Sdf::Plane {
+            normal: normal.try_normalize().unwrap_or(glam::Vec3::Z),
+            offset: offset.into(),
+        }
+    }
+    /// A smooth union with blending radius `k`.
+    pub fn smooth_union(children: Vec<Sdf>, k: impl Into<Param>) -> Self {
+        Sdf::SmoothUnion {
+            children,
+            k: k.into(),
+        }
+    }
+    /// `child` rotated by `angle_deg` about `axis` (normalised; `+z` if zero), scaled by `scale`, then
+    /// translated by `translate`.
+    pub fn transform(
+        child: Sdf,
+        translate: impl Into<Param3>,
+        axis: glam::Vec3,
+        angle_deg: impl Into<Param>,
+        scale: impl Into<Param>,
+    ) -> Self {
+        Sdf::Transform {
+            translate: translate.into(),
+            axis: axis.try_normalize().unwrap_or(glam::Vec3::Z),
+            angle: angle_deg.into(),
+            scale: scale.into(),
+            child: Box::new(child),
+        }
+    }
+    /// A grid node over `[bbox_min, bbox_max]`, after checking the data ([`GridData::validate`]) and that
+    /// the box is finite with `bbox_min < bbox_max`.
+    pub fn grid(data: GridData, bbox_min: glam::Vec3, bbox_max: glam::Vec3) -> Result<Self> {
+        data.validate("grid")?;
+        if !(bbox_min.is_finite() && bbox_max.is_finite() && bbox_min.cmplt(bbox_max).all()) {
+            return Err(crate::Error::field(
+                "grid.bbox",
+                format!("must be finite with min < max, got {bbox_min} .. {bbox_max}"),
+            ));
+        }
+        Ok(Sdf::Grid {
+            data: Arc::new(data),
+            bbox_min,
+            bbox_max,
+        })
     }
 }

@@ -1,0 +1,46 @@
+//! Sampling any node onto a grid.
+
+use super::{GridData, Sdf};
+use rayon::prelude::*;
+
+/// Sample counts per axis for [`bake`]: `res` along the longest edge of the box, and on the other axes
+/// the count that keeps the spacing closest to it (`round((res − 1) e_a / e_max) + 1`), each at least 4.
+pub fn bake_dims(bbox_min: glam::Vec3, bbox_max: glam::Vec3, res: usize) -> [usize; 3] {
+    let res = res.max(4);
+    let ext = (bbox_max - bbox_min).max(glam::Vec3::ZERO);
+    let longest = ext.max_element();
+    std::array::from_fn(|a| {
+        if longest > 0.0 && longest.is_finite() {
+            (((res - 1) as f32 * ext[a] / longest).round() as usize + 1).max(4)
+        } else {
+            res
+        }
+    })
+}
+
+/// Sample `sdf` on the lattice over `[bbox_min, bbox_max]` with [`bake_dims`] samples per axis: sample
+/// `(i, j, k)` at `bbox_min + (i, j, k) · (bbox_max − bbox_min)/(dims − 1)`, so the first and last samples
+/// lie on the faces (the grid node built from the result uses the same box). Cells are near-cubic: spacing
+/// differs between axes only by the rounding of the counts. Runs in parallel over z slices.
+///
+/// The samples become B-spline control points, so the baked surface sits about `h²/6 ∇²φ` off the
+/// original (see [`crate::sdf`]'s grid notes); keep a margin of a few cells between the surface and the box.
+pub fn bake(sdf: &Sdf, bbox_min: glam::Vec3, bbox_max: glam::Vec3, res: usize) -> GridData {
+    let dims = bake_dims(bbox_min, bbox_max, res);
+    let [nx, ny, nz] = dims;
+    let step =
+        (bbox_max - bbox_min) / (glam::UVec3::from_array(dims.map(|n| n as u32)) - 1).as_vec3();
+    let mut values = vec![0.0f32; nx * ny * nz];
+    values
+        .par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(z, slice)| {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let p = bbox_min + glam::Vec3::new(x as f32, y as f32, z as f32) * step;
+                    slice[y * nx + x] = sdf.eval_f32(p);
+                }
+            }
+        });
+    GridData { dims, values }
+}

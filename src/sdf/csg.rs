@@ -1,0 +1,128 @@
+//! Constructive solid geometry: hard union, intersection and difference (min / max), and the smooth union.
+//!
+//! Hard CSG branches on primal values: at the switching surface (`φ_a = φ_b`) the result has a crease
+//! whose derivative the branch does not see; those creases need their own boundary terms (DESIGN §3,
+//! "Creases"). The smooth union has none.
+
+use super::Sdf;
+use crate::math::{Aabb, Vec3};
+use crate::scalar::Scalar;
+
+/// How much [`smin`] can lower `min(a, b)`: `k/6`, reached at `a = b`.
+pub(super) const SMIN_MAX_LOWERING: f32 = 1.0 / 6.0;
+
+/// Cubic polynomial smooth minimum (Quílez, "smooth minimum", cubic variant):
+/// `smin(a, b) = min(a, b) − k/6 · h³`, `h = max(k − |a − b|, 0)/k`.
+///
+/// Continuity: it equals `min` where `|a − b| ≥ k`. Writing `s = |a − b|`, `min = (a + b)/2 − s/2`, the
+/// correction is `g(s) = s/2 + k/6 (1 − s/k)³`, with `g'(0) = 0` (so no kink at `a = b`) and
+/// `g(k) = g'(k) − 1/2 = g''(k) = 0`: the result is C2 everywhere (C3 fails at `a = b` and `s = k`),
+/// which the curvature needs. Its partial derivatives are `1 − (1 − s/k)²/2 ∈ [1/2, 1]` and its
+/// complement, so the gradient is a convex combination of the children's gradients: the Lipschitz bound
+/// of the children carries over. It is at most `k/6` below `min(a, b)` ([`SMIN_MAX_LOWERING`]).
+/// With `k ≤ 0` it is the plain minimum.
+#[inline(always)]
+pub(super) fn smin<S: Scalar>(a: S, b: S, k: S) -> S {
+    let kp = k.primal();
+    let m = a.min(b);
+    if kp.is_nan() || kp <= 0.0 {
+        return m;
+    }
+    let s = (a - b).abs();
+    if s.primal() >= kp {
+        // Outside the blend: exactly the minimum (and its derivatives, all orders).
+        return m;
+    }
+    let h = (k - s) / k;
+    m - h * h * h * k * SMIN_MAX_LOWERING
+}
+
+/// Union: the minimum of the children (`+∞`, the empty set, for no child).
+#[inline(always)]
+pub(super) fn union<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+    let mut it = children.iter();
+    let Some(first) = it.next() else {
+        return S::constant(f32::INFINITY);
+    };
+    let mut d = first.eval(p);
+    for c in it {
+        d = d.min(c.eval(p));
+    }
+    d
+}
+
+/// Intersection: the maximum of the children (`−∞`, the whole space, for no child).
+#[inline(always)]
+pub(super) fn intersection<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+    let mut it = children.iter();
+    let Some(first) = it.next() else {
+        return S::constant(f32::NEG_INFINITY);
+    };
+    let mut d = first.eval(p);
+    for c in it {
+        d = d.max(c.eval(p));
+    }
+    d
+}
+
+/// Difference: `max(φ_0, −φ_1, −φ_2, …)` (`+∞` for no child).
+#[inline(always)]
+pub(super) fn difference<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+    let mut it = children.iter();
+    let Some(first) = it.next() else {
+        return S::constant(f32::INFINITY);
+    };
+    let mut d = first.eval(p);
+    for c in it {
+        d = d.max(-c.eval(p));
+    }
+    d
+}
+
+/// Smooth union: [`smin`] folded left over the children (`+∞` for no child).
+#[inline(always)]
+pub(super) fn smooth_union<S: Scalar>(children: &[Sdf], k: S, p: Vec3<S>) -> S {
+    let mut it = children.iter();
+    let Some(first) = it.next() else {
+        return S::constant(f32::INFINITY);
+    };
+    let mut d = first.eval(p);
+    for c in it {
+        d = smin(d, c.eval(p), k);
+    }
+    d
+}
+
+/// Box of a union: the union of the children's boxes.
+pub(super) fn union_bounds(children: &[Sdf]) -> Aabb {
+    children
+        .iter()
+        .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds()))
+}
+
+/// Box of an intersection: the intersection of the children's boxes (the whole space for no child).
+pub(super) fn intersection_bounds(children: &[Sdf]) -> Aabb {
+    children
+        .iter()
+        .fold(Aabb::INFINITE, |b, c| b.intersection(&c.bounds()))
+}
+
+/// Box of a smooth union.
+///
+/// Folding [`smin`] over `n` children lowers the minimum by at most `(n − 1) k/6`, so `{φ ≤ 0}` lies in
+/// `∪ {φ_i ≤ (n − 1) k/6}`. For exact distances that is each child's box grown by `(n − 1) k/6`; children
+/// that under-estimate the distance to their box (hard intersections, whose per-axis argument loses up to
+/// `√3` after a rotation) need more, so the box grows by `max(k, √3 (n − 1) k/6)`, i.e. by `k` for up to
+/// four children.
+pub(super) fn smooth_union_bounds(children: &[Sdf], k: f32) -> Aabb {
+    let n = children.len().max(1) as f32;
+    let k = k.max(0.0);
+    let grow = k.max(3f32.sqrt() * (n - 1.0) * k * SMIN_MAX_LOWERING);
+    let b = union_bounds(children);
+    if b.is_empty() { b } else { b.expanded(grow) }
+}
+
+/// Largest Lipschitz bound of the children (min, max, negation and [`smin`] all keep it); 1 for none.
+pub(super) fn max_lipschitz(children: &[Sdf]) -> f32 {
+    children.iter().map(Sdf::lipschitz).fold(1.0, f32::max)
+}
