@@ -1,7 +1,9 @@
 //! Surface scattering. Directions point away from the surface; `n` is the outward unit normal.
 
-use crate::math::Vec3;
+use crate::math::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::math::{Frame, Vec3};
 use crate::scalar::{Param3, Scalar};
+use std::f32::consts::FRAC_1_PI;
 
 /// A BSDF.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -24,18 +26,65 @@ pub struct BsdfSample {
 
 impl Bsdf {
     /// `f(wi, wo)` (without the cosine), generic.
+    ///
+    /// The side test looks at primal values only: the jump of `f` where `wi` crosses the tangent plane is
+    /// a visibility-like discontinuity whose derivative belongs to the boundary terms, not to this one.
+    #[inline]
     pub fn eval<S: Scalar>(&self, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
-        let _ = (n, wi, wo);
-        todo!("bsdf: eval")
+        match self {
+            Bsdf::Diffuse { albedo } => {
+                let same_side = n.dot(wi).primal() * n.dot(wo).primal() > 0.0;
+                if same_side {
+                    albedo.get::<S>() * S::constant(FRAC_1_PI)
+                } else {
+                    Vec3::zero()
+                }
+            }
+        }
     }
-    /// Samples `wi` given `wo`.
+
+    /// Samples `wi` given `wo`: cosine-weighted on `wo`'s side of the surface. `None` when `wo` lies in
+    /// the tangent plane (no side to scatter to).
+    #[inline]
     pub fn sample(&self, n: glam::Vec3, wo: glam::Vec3, u: glam::Vec2) -> Option<BsdfSample> {
-        let _ = (n, wo, u);
-        todo!("bsdf: sample")
+        match self {
+            Bsdf::Diffuse { .. } => {
+                let cos_o = n.dot(wo);
+                if cos_o == 0.0 || !cos_o.is_finite() {
+                    return None;
+                }
+                let side_n = if cos_o > 0.0 { n } else { -n };
+                let local = cosine_hemisphere(u);
+                let pdf = cosine_hemisphere_pdf(local.z);
+                if pdf <= 0.0 {
+                    return None;
+                }
+                let wi = Frame::from_normal(side_n).to_world(local);
+                Some(BsdfSample { wi, pdf })
+            }
+        }
     }
-    /// Density of [`Bsdf::sample`] per steradian.
+
+    /// Density of [`Bsdf::sample`] per steradian: `|cos θi| / π` on `wo`'s side, zero on the other.
+    #[inline]
     pub fn pdf(&self, n: glam::Vec3, wo: glam::Vec3, wi: glam::Vec3) -> f32 {
-        let _ = (n, wo, wi);
-        todo!("bsdf: pdf")
+        match self {
+            Bsdf::Diffuse { .. } => {
+                let (ci, co) = (n.dot(wi), n.dot(wo));
+                if ci * co > 0.0 {
+                    cosine_hemisphere_pdf(ci.abs())
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// The albedo's primal value (for quick checks that a material reflects at all).
+    #[inline]
+    pub fn albedo(&self) -> glam::Vec3 {
+        match self {
+            Bsdf::Diffuse { albedo } => albedo.value(),
+        }
     }
 }

@@ -1,7 +1,9 @@
 //! Light sources: a one-sided rectangle, a sphere and a constant environment.
 
-use crate::math::{Ray, Vec3};
+use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
+use crate::math::{Frame, Ray, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
+use std::f32::consts::PI;
 
 /// An emitter. Finite emitters are also surfaces that block light and are seen by rays.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,19 +52,211 @@ pub struct EmitterSample {
     pub pdf: f32,
 }
 
+/// Below this `sin² θmax` the cone around a far sphere is too thin for `f32` (pbrt-v4 uses the same
+/// threshold, sin² 1.5°): `1 − cos θmax` is then taken from its series `sin²/2 + sin⁴/8`.
+const THIN_CONE_SIN2: f32 = 0.000_685_23;
+
+/// `1 − cos θmax` of the cone subtended by a sphere with `sin² θmax = sin2`, without cancellation.
+#[inline]
+fn one_minus_cos_max(sin2: f32) -> f32 {
+    if sin2 < THIN_CONE_SIN2 {
+        0.5 * sin2 + 0.125 * sin2 * sin2
+    } else {
+        1.0 - (1.0 - sin2).max(0.0).sqrt()
+    }
+}
+
 impl Emitter {
+    /// Surface area of a finite emitter (`∞` for the environment).
+    pub fn area(&self) -> f32 {
+        match self {
+            Emitter::Rectangle { size, .. } => size[0].value * size[1].value,
+            Emitter::Sphere { radius, .. } => 4.0 * PI * radius.value * radius.value,
+            Emitter::Constant { .. } => f32::INFINITY,
+        }
+    }
+
     /// Nearest intersection `(t, outward normal)` of `ray` with a finite emitter in `(0, t_max)`.
+    ///
+    /// Both sides of a rectangle block rays; its returned normal is always the emitting side's `normal`.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, glam::Vec3)> {
-        let _ = (ray, t_max);
-        todo!("emitter: intersect")
+        match self {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u,
+                size,
+                ..
+            } => {
+                let denom = ray.d.dot(*normal);
+                if denom == 0.0 {
+                    return None;
+                }
+                let c = center.value();
+                let t = (c - ray.o).dot(*normal) / denom;
+                if !(t > 0.0 && t < t_max) {
+                    return None;
+                }
+                let local = ray.at(t) - c;
+                let v = normal.cross(*u);
+                let inside = local.dot(*u).abs() <= 0.5 * size[0].value
+                    && local.dot(v).abs() <= 0.5 * size[1].value;
+                inside.then_some((t, *normal))
+            }
+            Emitter::Sphere { center, radius, .. } => {
+                let c = center.value();
+                let r = radius.value;
+                // Ray-sphere in the form of Hearn & Baker (as pbrt): the closest approach avoids the
+                // cancellation of the textbook discriminant for far spheres.
+                let oc = ray.o - c;
+                let b = oc.dot(ray.d);
+                let closest = oc - ray.d * b;
+                let disc = r * r - closest.length_squared();
+                if disc < 0.0 {
+                    return None;
+                }
+                let q = -b - b.signum() * disc.sqrt();
+                let c_term = oc.length_squared() - r * r;
+                let (mut t0, mut t1) = if q != 0.0 {
+                    (c_term / q, q)
+                } else {
+                    (0.0, 0.0)
+                };
+                if t0 > t1 {
+                    std::mem::swap(&mut t0, &mut t1);
+                }
+                let t = if t0 > 0.0 { t0 } else { t1 };
+                if !(t > 0.0 && t < t_max) {
+                    return None;
+                }
+                let n = (ray.at(t) - c).normalize_or_zero();
+                Some((t, n))
+            }
+            Emitter::Constant { .. } => None,
+        }
     }
+
     /// Samples a direction towards the emitter from `reference`.
+    ///
+    /// - Rectangle: uniform by area, density `d² / (A cos θ_light)` per steradian; `None` when the
+    ///   reference sees the non-emitting side (the sample would carry no light).
+    /// - Sphere: uniform in the cone of directions it subtends (density `1 / (2π (1 − cos θmax))`);
+    ///   uniform by area from inside.
+    /// - Constant: uniform over the sphere of directions (`1 / 4π`): `sample_li` does not know the
+    ///   surface normal, so it cannot favour the upper hemisphere.
+    #[inline]
     pub fn sample_li(&self, reference: glam::Vec3, u: glam::Vec2) -> Option<EmitterSample> {
-        let _ = (reference, u);
-        todo!("emitter: sample_li")
+        match self {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u: eu,
+                size,
+                ..
+            } => {
+                let v = normal.cross(*eu);
+                let (a, b) = (size[0].value, size[1].value);
+                let p = center.value() + *eu * ((u.x - 0.5) * a) + v * ((u.y - 0.5) * b);
+                let to = p - reference;
+                let d2 = to.length_squared();
+                if d2.is_nan() || d2 <= 0.0 {
+                    return None;
+                }
+                let dist = d2.sqrt();
+                let wi = to / dist;
+                let cos_l = -wi.dot(*normal);
+                if cos_l.is_nan() || cos_l <= 0.0 {
+                    return None;
+                }
+                let pdf = d2 / (a * b * cos_l);
+                (pdf.is_finite() && pdf > 0.0).then_some(EmitterSample {
+                    wi,
+                    dist,
+                    p,
+                    n: *normal,
+                    pdf,
+                })
+            }
+            Emitter::Sphere { center, radius, .. } => {
+                let c = center.value();
+                let r = radius.value;
+                let dc = c - reference;
+                let d2c = dc.length_squared();
+                if d2c <= r * r {
+                    return self.sample_sphere_area(reference, c, r, u);
+                }
+                let dist_c = d2c.sqrt();
+                let axis = dc / dist_c;
+                let sin2 = (r * r / d2c).min(1.0);
+                let omc = one_minus_cos_max(sin2);
+                // Uniform cone written with `1 − cos θmax` (not `cos θmax`) so thin cones keep precision.
+                let one_minus_z = u.x * omc;
+                let z = 1.0 - one_minus_z;
+                let s = (one_minus_z * (2.0 - one_minus_z)).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.y;
+                let local = glam::Vec3::new(s * phi.cos(), s * phi.sin(), z);
+                let wi = Frame::from_normal(axis).to_world(local).normalize();
+                // Nearest hit along wi; the discriminant is clamped because directions at the cone's
+                // rim graze the sphere and round-off may push them just outside.
+                let b = dc.dot(wi);
+                let closest2 = (dc - wi * b).length_squared();
+                let t = (b - (r * r - closest2).max(0.0).sqrt()).max(0.0);
+                let p = reference + wi * t;
+                let n = (p - c).normalize_or_zero();
+                let pdf = 1.0 / (2.0 * PI * omc);
+                (pdf.is_finite() && pdf > 0.0).then_some(EmitterSample {
+                    wi,
+                    dist: t,
+                    p,
+                    n,
+                    pdf,
+                })
+            }
+            Emitter::Constant { .. } => {
+                let wi = uniform_sphere(u);
+                Some(EmitterSample {
+                    wi,
+                    dist: f32::INFINITY,
+                    p: reference + wi,
+                    n: -wi,
+                    pdf: UNIFORM_SPHERE_PDF,
+                })
+            }
+        }
     }
+
+    /// Uniform area sampling of a sphere, converted to solid angle at `reference`.
+    fn sample_sphere_area(
+        &self,
+        reference: glam::Vec3,
+        c: glam::Vec3,
+        r: f32,
+        u: glam::Vec2,
+    ) -> Option<EmitterSample> {
+        let n = uniform_sphere(u);
+        let p = c + n * r;
+        let to = p - reference;
+        let d2 = to.length_squared();
+        if d2.is_nan() || d2 <= 0.0 {
+            return None;
+        }
+        let dist = d2.sqrt();
+        let wi = to / dist;
+        let cos_l = wi.dot(n).abs();
+        let pdf = d2 / (4.0 * PI * r * r * cos_l);
+        (pdf.is_finite() && pdf > 0.0).then_some(EmitterSample {
+            wi,
+            dist,
+            p,
+            n,
+            pdf,
+        })
+    }
+
     /// Density per steradian of [`Emitter::sample_li`] from `reference` to the point `p` (normal `n`) it
     /// would have produced (`p` ignored for the environment, where `wi` alone matters).
+    #[inline]
     pub fn pdf_li(
         &self,
         reference: glam::Vec3,
@@ -70,14 +264,51 @@ impl Emitter {
         p: glam::Vec3,
         n: glam::Vec3,
     ) -> f32 {
-        let _ = (reference, wi, p, n);
-        todo!("emitter: pdf_li")
+        match self {
+            Emitter::Rectangle { size, .. } => {
+                let cos_l = -wi.dot(n);
+                if cos_l.is_nan() || cos_l <= 0.0 {
+                    return 0.0;
+                }
+                let d2 = (p - reference).length_squared();
+                let pdf = d2 / (size[0].value * size[1].value * cos_l);
+                if pdf.is_finite() { pdf } else { 0.0 }
+            }
+            Emitter::Sphere { center, radius, .. } => {
+                let c = center.value();
+                let r = radius.value;
+                let d2c = (c - reference).length_squared();
+                let pdf = if d2c <= r * r {
+                    let cos_l = wi.dot(n).abs();
+                    (p - reference).length_squared() / (4.0 * PI * r * r * cos_l)
+                } else {
+                    1.0 / (2.0 * PI * one_minus_cos_max((r * r / d2c).min(1.0)))
+                };
+                if pdf.is_finite() { pdf } else { 0.0 }
+            }
+            Emitter::Constant { .. } => UNIFORM_SPHERE_PDF,
+        }
     }
+
     /// Radiance leaving point `p` (normal `n`) in direction `w` (away from the emitter), generic.
+    ///
+    /// Finite emitters emit on the side of `n` only; the side test looks at primal values (its jump is a
+    /// visibility-like discontinuity handled by boundary terms).
+    #[inline]
     pub fn emitted<S: Scalar>(&self, p: Vec3<S>, n: Vec3<S>, w: Vec3<S>) -> Vec3<S> {
-        let _ = (p, n, w);
-        todo!("emitter: emitted")
+        let _ = p;
+        match self {
+            Emitter::Rectangle { radiance, .. } | Emitter::Sphere { radiance, .. } => {
+                if n.dot(w).primal() > 0.0 {
+                    radiance.get::<S>()
+                } else {
+                    Vec3::zero()
+                }
+            }
+            Emitter::Constant { radiance } => radiance.get::<S>(),
+        }
     }
+
     /// True for emitters at infinity.
     pub fn is_infinite(&self) -> bool {
         matches!(self, Emitter::Constant { .. })

@@ -1,8 +1,19 @@
 //! Light transport estimators. Paths are traced in `f32`; their contributions are evaluated with the
 //! generic shading code.
+//!
+//! Both estimators share one tracer ([`path::trace_path`]): `Direct` is a path with a single scattering
+//! vertex. A pixel is the mean of its samples' radiances: the film offset of each sample is drawn
+//! exactly from the pixel filter, so every sample's filter weight over its density is 1.
+
+pub mod path;
+pub mod shading;
 
 use crate::film::Image;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
+use path::{PathRecord, TraceCounters, contribution, detached, trace_path};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Which estimator renders the image.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -13,8 +24,22 @@ pub enum IntegratorKind {
     /// Path tracing with next-event estimation and MIS, up to `max_depth` bounces.
     Path {
         /// Longest path in segments after the camera (1 = direct lighting only).
+        ///
+        /// Counted as scattering vertices: `max_depth = d` scatters at `x1 … xd`, each with a light
+        /// sample and a BSDF sample, so `1` is exactly [`IntegratorKind::Direct`] and `0` shows emitters
+        /// only. No Russian roulette: the estimate of the `d`-bounce truncation is unbiased.
         max_depth: u32,
     },
+}
+
+impl IntegratorKind {
+    /// Number of scattering vertices of the longest path.
+    pub fn max_scatter(&self) -> u32 {
+        match self {
+            IntegratorKind::Direct => 1,
+            IntegratorKind::Path { max_depth } => *max_depth,
+        }
+    }
 }
 
 /// What to render apart from the scene itself.
@@ -45,12 +70,108 @@ pub struct RenderStats {
     pub samples: u64,
     /// Rays whose sphere tracing ran out of steps (treated as misses).
     pub exhausted_rays: u64,
+    /// Samples whose radiance was not finite (NaN or infinite); they count as black. The first one is
+    /// reported on stderr with its pixel and sample index.
+    pub invalid_samples: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
 
+/// Stream of the [`Sampler`] used by camera paths.
+pub const CAMERA_STREAM: u64 = 0;
+
+/// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
+pub fn sample_pixel(
+    scene: &Scene,
+    seed: u64,
+    x: u32,
+    y: u32,
+    sample: u32,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) -> glam::Vec3 {
+    let camera = &scene.camera;
+    let pixel = y as u64 * camera.width as u64 + x as u64;
+    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
+    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let offset = camera.filter.sample(sampler.next_2d());
+    let ray = camera.generate_ray(centre + offset);
+    trace_path(
+        scene,
+        ray,
+        scene.integrator.max_scatter(),
+        &mut sampler,
+        record,
+        counters,
+    );
+    contribution::<f32>(scene, record, detached).into()
+}
+
 /// Renders the image of `scene`.
+///
+/// Rows are rendered in parallel; each pixel sums its own samples in a fixed order, so the image is
+/// identical bit for bit whatever the number of threads.
 pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
-    let _ = (scene, options);
-    todo!("integrator: render")
+    let start = std::time::Instant::now();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let mut image = Image::new(width, height);
+    let exhausted = AtomicU64::new(0);
+    let invalid = AtomicU64::new(0);
+    let bar = options.progress.then(|| {
+        let bar = indicatif::ProgressBar::new(height as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}/{eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let spp = options.spp.max(1);
+    let row_len = 3 * width as usize;
+    if row_len > 0 {
+        image
+            .rgb
+            .par_chunks_mut(row_len)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let y = y as u32;
+                let mut record = PathRecord::default();
+                let mut counters = TraceCounters::default();
+                let mut row_invalid = 0u64;
+                for x in 0..width {
+                    let mut sum = glam::Vec3::ZERO;
+                    for s in 0..spp {
+                        let l =
+                            sample_pixel(scene, options.seed, x, y, s, &mut record, &mut counters);
+                        if l.is_finite() {
+                            sum += l;
+                        } else {
+                            if invalid.load(Ordering::Relaxed) == 0 && row_invalid == 0 {
+                                eprintln!(
+                                    "non-finite radiance {l} at pixel ({x}, {y}), sample {s}"
+                                );
+                            }
+                            row_invalid += 1;
+                        }
+                    }
+                    let mean = sum / spp as f32;
+                    let i = 3 * x as usize;
+                    row[i..i + 3].copy_from_slice(&mean.to_array());
+                }
+                exhausted.fetch_add(counters.exhausted, Ordering::Relaxed);
+                invalid.fetch_add(row_invalid, Ordering::Relaxed);
+                if let Some(bar) = &bar {
+                    bar.inc(1);
+                }
+            });
+    }
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let stats = RenderStats {
+        samples: spp as u64 * width as u64 * height as u64,
+        exhausted_rays: exhausted.into_inner(),
+        invalid_samples: invalid.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    (image, stats)
 }

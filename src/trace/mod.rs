@@ -1,4 +1,39 @@
 //! Sphere tracing in `f32`: first hit along a ray, and every hit along a line.
+//!
+//! # What counts as a hit
+//!
+//! A hit is a **sign change** of `φ` along the ray, located to within a tolerance. The tracer marches the
+//! function `g(t) = s·φ(o + t d)`, with `s = ±1` chosen so that `g(t0) ≥ 0` (`s = −1` if the ray starts
+//! inside: then the first crossing is the *exit*; on the surface, see below).
+//! Each step is `g/L` (Hart 1996), `L` the Lipschitz bound of `φ`, which cannot cross the surface. Where
+//! that step falls below the resolution `h = settings.eps`, the tracer *creeps* instead: steps of `h`,
+//! doubling on each consecutive creep step up to `64 h`, until `g` changes sign (an overshoot into the
+//! shape is fine: it brackets the crossing). The bracket is then refined with the Illinois variant of
+//! regula falsi. Creeping with growing steps keeps grazing rays cheap (a ray skimming a unit sphere at
+//! `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`; fixed `eps` steps would spend the whole
+//! budget there).
+//!
+//! Consequences, by design:
+//! - **Tolerance.** The returned `t` satisfies `|φ(t)| ≤ eps/100` (or the bracket has shrunk to a few ulps
+//!   of `t`), so `|t − t_true| ≲ 0.01·eps / |∇φ·d|`: tight for transversal hits, looser for grazing ones.
+//! - **Tangent grazes** (the ray passing within `eps` of the surface without crossing it, or touching it) are
+//!   **skipped**: they are not crossings. This is what tangent lines of the boundary sampler need (a line
+//!   started on the surface at its tangent point must find the *next* real crossing) and what keeps
+//!   [`all_hits`] alternating between entries and exits.
+//! - **Thin features**: where the ray creeps, a crossing whose chord along the ray is shorter than the
+//!   current creep step (at most `64 eps`) may be stepped over: a dip of depth `≲ 512 eps²/R` into a smooth
+//!   surface of radius `R` (negligible for `R ≫ eps`), a box corner clipped over less than `64 eps`, a
+//!   plate thinner than that along the ray. Far from surfaces nothing is skipped.
+//! - **Budget**: at most `settings.max_steps` evaluations of `φ` per crossing searched; a ray that runs
+//!   out (typically a ray skimming a surface for a long way) reports [`ShapeTrace::Exhausted`].
+//! - **Starting on the surface** (`|φ(t0)| ≤ eps/100`, e.g. at a point the tracer returned): the ray
+//!   belongs to the side it moves into, found by probing `φ` at `t0 + eps, t0 + 2 eps, …` (up to `64 eps`)
+//!   until `|φ|` rises above the float noise; `t0` itself is never reported. So a ray leaving a surface
+//!   point outward does not see that surface again, a ray entering it reports the exit, and a tangent line
+//!   started at its tangent point finds the next real crossing. A ray starting *near* (but not on) the
+//!   surface takes the side given by the sign of `φ(t0)`.
+//! - **After a crossing** the same probe decides the new side; if the ray is back on its original side
+//!   within the probe distance, the crossing was a graze at the noise level and is dropped.
 
 use crate::math::Ray;
 use crate::sdf::Sdf;
@@ -7,6 +42,9 @@ use crate::sdf::Sdf;
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct TraceSettings {
     /// Hit tolerance in scene units (|φ| below this, after refinement, is a hit). Set from the scene scale.
+    ///
+    /// Also the tracer's resolution: closer than `eps` to a surface it advances by steps of `eps` looking for
+    /// the sign change; after refinement `|φ(t)| ≤ eps / 100` (see the [module docs](self)).
     pub eps: f32,
     /// Steps before a ray is declared exhausted.
     pub max_steps: u32,
@@ -32,7 +70,256 @@ pub enum ShapeTrace {
     Exhausted(f32),
 }
 
+/// Largest creep step, in units of `eps`. A creep step can only miss a crossing whose chord along the ray
+/// is shorter than the step: on a smooth surface of radius `R` that is a dip of depth `≲ (32 eps)² / 2R`
+/// below the surface, below `eps` whenever `R ≳ 500 eps`.
+const MAX_CREEP: f32 = 64.0;
+/// Refinement target: `|φ|` at the returned `t`, as a fraction of `eps`.
+const REFINE_FRACTION: f32 = 0.01;
+/// Refinement iterations (Illinois converges superlinearly: 4 to 8 are typical).
+const REFINE_ITERATIONS: u32 = 40;
+
+/// The side of the surface a ray is on at some `t`, and where marching may resume from.
+#[derive(Copy, Clone, Debug)]
+struct Side {
+    /// `+1` outside, `−1` inside.
+    sign: f32,
+    /// Parameter to resume from.
+    t: f32,
+    /// `sign · φ` there (`≥ 0`).
+    g: f32,
+}
+
+/// Outcome of one crossing search.
+#[derive(Copy, Clone, Debug)]
+enum Crossing {
+    /// Root estimate `t`, and the far side of the surface to continue from.
+    Hit {
+        t: f32,
+        next: Side,
+    },
+    Miss,
+    Exhausted(f32),
+}
+
+/// The inverse of a usable Lipschitz bound. A non-positive or non-finite bound is a caller bug; in release
+/// builds it falls back to 1 (exact for true distance functions) rather than looping or producing NaN.
+#[inline]
+fn inverse_lipschitz(lipschitz: f32) -> f32 {
+    debug_assert!(
+        lipschitz.is_finite() && lipschitz > 0.0,
+        "Lipschitz bound must be finite and positive, got {lipschitz}"
+    );
+    if lipschitz.is_finite() && lipschitz > 0.0 {
+        1.0 / lipschitz
+    } else {
+        1.0
+    }
+}
+
+/// Smallest step that still moves `t` in `f32` (a few ulps), so a far ray cannot stall.
+#[inline]
+fn min_progress(t: f32) -> f32 {
+    t.abs() * (4.0 * f32::EPSILON) + f32::MIN_POSITIVE
+}
+
+/// One tracing job: the function along the ray, the interval end and the step budget.
+struct Marcher<'a> {
+    sdf: &'a Sdf,
+    ray: &'a Ray,
+    inv_l: f32,
+    t1: f32,
+    eps: f32,
+    /// `|φ|` below which a point counts as on the surface (the refinement target).
+    on_surface: f32,
+    steps_left: u32,
+}
+
+impl<'a> Marcher<'a> {
+    fn new(sdf: &'a Sdf, lipschitz: f32, ray: &'a Ray, t1: f32, settings: &TraceSettings) -> Self {
+        let eps = if settings.eps > 0.0 {
+            settings.eps
+        } else {
+            0.0
+        };
+        Self {
+            sdf,
+            ray,
+            inv_l: inverse_lipschitz(lipschitz),
+            t1,
+            eps,
+            on_surface: REFINE_FRACTION * eps,
+            steps_left: settings.max_steps,
+        }
+    }
+
+    #[inline]
+    fn phi(&mut self, t: f32) -> f32 {
+        self.steps_left = self.steps_left.saturating_sub(1);
+        self.sdf.eval_f32(self.ray.at(t))
+    }
+
+    /// The side the ray is on at `t` (where `φ = phi`). On the surface (`|φ| ≤ eps/100`, e.g. a point the
+    /// tracer returned) the side is the one the ray moves into: probes at `t + eps, t + 2 eps, …` up to
+    /// `64 eps` until `|φ|` exceeds the on-surface level, and marching resumes from that probe. This is
+    /// what makes a tangent line started at its tangent point skip it: there `φ ≈ δ²κ/2` is below the
+    /// float noise for the first few probes.
+    fn side(&mut self, t: f32, phi: f32) -> Side {
+        let sign_of = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
+        if phi.abs() > self.on_surface {
+            let sign = sign_of(phi);
+            return Side {
+                sign,
+                t,
+                g: sign * phi,
+            };
+        }
+        let mut delta = self.eps;
+        let mut last = Side {
+            sign: sign_of(phi),
+            t,
+            g: phi.abs(),
+        };
+        while delta <= MAX_CREEP * self.eps && last.t < self.t1 {
+            let tp = (t + delta.max(min_progress(t))).min(self.t1);
+            let p = self.phi(tp);
+            let sign = sign_of(p);
+            last = Side {
+                sign,
+                t: tp,
+                g: sign * p,
+            };
+            if p.abs() > self.on_surface {
+                break;
+            }
+            delta *= 2.0;
+        }
+        last
+    }
+
+    /// Marches `g = sign·φ` from `from` to the first sign change in `[from.t, t1]` that the ray does not
+    /// immediately undo (a graze), and refines it.
+    fn next_crossing(&mut self, mut from: Side) -> Crossing {
+        let sign = from.sign;
+        let (mut t, mut g) = (from.t, from.g);
+        // Creep step inside the `eps` zone: starts at `eps`, doubles on each consecutive creep step up to
+        // `MAX_CREEP · eps`, resets when the ray leaves the zone.
+        let mut creep = self.eps;
+        loop {
+            // Also stops on a NaN parameter.
+            if t.partial_cmp(&self.t1) != Some(std::cmp::Ordering::Less) {
+                return Crossing::Miss;
+            }
+            if self.steps_left == 0 {
+                return Crossing::Exhausted(t);
+            }
+            let safe = g * self.inv_l;
+            let step = if safe >= self.eps {
+                creep = self.eps;
+                safe
+            } else {
+                let s = creep.max(safe);
+                creep = (2.0 * creep).min(MAX_CREEP * self.eps);
+                s
+            }
+            .max(min_progress(t));
+            let t_next = (t + step).min(self.t1);
+            let g_next = sign * self.phi(t_next);
+            if g_next.is_nan() {
+                return Crossing::Miss;
+            }
+            if g_next > 0.0 {
+                t = t_next;
+                g = g_next;
+                continue;
+            }
+            let (hit, beyond, g_beyond) = self.refine(sign, t, g, t_next, g_next);
+            let next = self.side(beyond, sign * g_beyond);
+            // A crossing right at `t1` cannot be probed beyond: keep it.
+            let undecided_at_end = next.t >= self.t1 && next.g <= self.on_surface;
+            if next.sign != sign || undecided_at_end {
+                return Crossing::Hit { t: hit, next };
+            }
+            // Back on the starting side within the probe distance: a graze at the float-noise level.
+            from = next;
+            t = from.t;
+            g = from.g;
+            creep = self.eps;
+        }
+    }
+
+    /// Illinois (modified regula falsi) on the bracket `[a, b]`, `g(a) > 0 ≥ g(b)`, until `|g| ≤ eps/100`
+    /// at an end or the bracket is a few ulps wide. Returns the end with the smaller `|g|` as the hit, and
+    /// the inside end `b` with its `g`.
+    fn refine(&mut self, sign: f32, mut a: f32, ga: f32, mut b: f32, gb: f32) -> (f32, f32, f32) {
+        // True values at the ends, and the weights Illinois uses for the secant (halved on the end that
+        // is kept twice in a row, which restores superlinear convergence).
+        let (mut ga, mut gb) = (ga, gb);
+        let (mut wa, mut wb) = (ga, gb);
+        let mut side = 0i8;
+        for _ in 0..REFINE_ITERATIONS {
+            if ga.abs() <= self.on_surface
+                || gb.abs() <= self.on_surface
+                || b - a <= 2.0 * min_progress(b)
+            {
+                break;
+            }
+            // wa > 0 ≥ wb, so the denominator is positive unless both underflow; bisect then.
+            let denom = wa - wb;
+            let mut m = if denom > 0.0 {
+                b - wb * (b - a) / denom
+            } else {
+                0.5 * (a + b)
+            };
+            if !(m > a && m < b) {
+                m = 0.5 * (a + b);
+            }
+            // Refinement is not charged to the step budget: it is bounded by REFINE_ITERATIONS.
+            let gm = sign * self.sdf.eval_f32(self.ray.at(m));
+            if gm > 0.0 {
+                a = m;
+                ga = gm;
+                wa = gm;
+                if side == 1 {
+                    wb *= 0.5;
+                }
+                side = 1;
+            } else {
+                b = m;
+                gb = gm;
+                wb = gm;
+                if side == -1 {
+                    wa *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        let t = if ga.abs() < gb.abs() { a } else { b };
+        (t, b, gb)
+    }
+
+    /// The side at `t0`, or `None` for an empty interval or a NaN value.
+    fn start(&mut self, t0: f32) -> Option<Side> {
+        // Rejects NaN bounds too.
+        if !matches!(
+            t0.partial_cmp(&self.t1),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        ) {
+            return None;
+        }
+        let phi = self.phi(t0);
+        if phi.is_nan() {
+            return None;
+        }
+        Some(self.side(t0, phi))
+    }
+}
+
 /// First zero crossing of `sdf` (Lipschitz bound `lipschitz`) along `ray` in `[t0, t1]`.
+///
+/// If the ray starts inside (`φ(o + t0 d) < 0`) the first crossing is where it leaves the shape; if it
+/// starts on the surface, the side is the one it moves into and `t0` itself is not reported. Tangent
+/// grazes are not crossings. See the [module docs](self) for the tolerance and the step budget.
 pub fn sphere_trace(
     sdf: &Sdf,
     lipschitz: f32,
@@ -41,11 +328,22 @@ pub fn sphere_trace(
     t1: f32,
     settings: &TraceSettings,
 ) -> ShapeTrace {
-    let _ = (sdf, lipschitz, ray, t0, t1, settings);
-    todo!("trace: sphere_trace")
+    let mut m = Marcher::new(sdf, lipschitz, ray, t1, settings);
+    let Some(side) = m.start(t0) else {
+        return ShapeTrace::Miss;
+    };
+    match m.next_crossing(side) {
+        Crossing::Hit { t, .. } => ShapeTrace::Hit(t),
+        Crossing::Miss => ShapeTrace::Miss,
+        Crossing::Exhausted(t) => ShapeTrace::Exhausted(t),
+    }
 }
 
 /// Every zero crossing of `sdf` along `ray` in `[t0, t1]`, in increasing order.
+///
+/// Crossings alternate between entries and exits (the first one is an exit if the ray starts inside).
+/// Tangent grazes are skipped. If the step budget runs out, the crossings found so far are returned; use
+/// [`all_hits_checked`] to learn whether that happened.
 pub fn all_hits(
     sdf: &Sdf,
     lipschitz: f32,
@@ -54,6 +352,33 @@ pub fn all_hits(
     t1: f32,
     settings: &TraceSettings,
 ) -> Vec<f32> {
-    let _ = (sdf, lipschitz, ray, t0, t1, settings);
-    todo!("trace: all_hits")
+    all_hits_checked(sdf, lipschitz, ray, t0, t1, settings).0
+}
+
+/// As [`all_hits`], also returning `Some(t)` if the search ran out of steps at `t` (the list is then
+/// complete only up to `t`). The budget `settings.max_steps` is per crossing searched.
+pub fn all_hits_checked(
+    sdf: &Sdf,
+    lipschitz: f32,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+) -> (Vec<f32>, Option<f32>) {
+    let mut hits = Vec::new();
+    let mut m = Marcher::new(sdf, lipschitz, ray, t1, settings);
+    let Some(mut side) = m.start(t0) else {
+        return (hits, None);
+    };
+    loop {
+        match m.next_crossing(side) {
+            Crossing::Hit { t, next } => {
+                hits.push(t);
+                side = next;
+                m.steps_left = settings.max_steps;
+            }
+            Crossing::Miss => return (hits, None),
+            Crossing::Exhausted(at) => return (hits, Some(at)),
+        }
+    }
 }

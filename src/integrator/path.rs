@@ -1,0 +1,414 @@
+//! Paths traced in `f32` and recorded as vertices, then evaluated through the generic shading code.
+//!
+//! A camera sample is one chain of BSDF-sampled vertices `x1, x2, …` (a tree with next-event branches:
+//! at each scattering vertex one emitter point `y_i` is sampled). Tracing decides everything discrete
+//! (what was hit, visibility, multiple importance sampling weights) and stores the detached densities per
+//! unit *area* of the vertex they produced (per steradian for vertices at infinity). [`contribution`]
+//! then re-evaluates `f(x̄) / p(x̄)` with any scalar type: the BSDFs, geometry terms and emission see the
+//! positions and normals returned by an `attach` function (constants for the image, attached vertices
+//! for the interior derivative), while densities and MIS weights stay detached.
+//!
+//! Estimator (Veach 1997, ch. 9, with the power heuristic): at each scattering vertex `x_i`,
+//! `L += β_i · w_light · f(x_i) G(x_i, y) L_e(y) / p_A(y)` for the light sample and, for the BSDF-sampled
+//! next vertex, `β_{i+1} = β_i f(x_i) G(x_i, x_{i+1}) / p_A(x_{i+1})` with `L += β_{i+1} w_bsdf L_e(x_{i+1})`
+//! when it is on an emitter (or at infinity, with `|cos|` and a solid-angle density instead of `G`).
+
+use super::shading::{abs_cos, direction, geometry_term};
+use crate::math::sampling::power_heuristic;
+use crate::math::{Ray, Vec3};
+use crate::sampler::Sampler;
+use crate::scalar::Scalar;
+use crate::scene::{Hit, Intersection, Scene, Surface};
+use crate::trace::{ShapeTrace, sphere_trace};
+
+/// What a recorded vertex lies on.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// Shape `i` of [`Scene::shapes`] (a scattering vertex).
+    Shape(usize),
+    /// Finite emitter `i` of [`Scene::emitters`] (the path ends there).
+    Emitter(usize),
+    /// The environment emitter `i` of [`Scene::emitters`], at infinity: `p` holds the unit direction.
+    Environment(usize),
+}
+
+/// A vertex of the BSDF-sampled chain.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PathVertex {
+    /// Position (for [`VertexKind::Environment`], the unit direction towards infinity).
+    pub p: glam::Vec3,
+    /// Outward unit normal (unused at infinity).
+    pub n: glam::Vec3,
+    /// What the vertex lies on.
+    pub kind: VertexKind,
+    /// Detached density of this vertex given the previous one: per unit area (per steradian at
+    /// infinity). The first vertex has density 1: its pixel filter is sampled exactly, so its weight is 1.
+    pub pdf: f32,
+    /// MIS weight of the emission found at this vertex (1 when seen from the camera).
+    pub mis: f32,
+}
+
+/// A next-event sample: a point on an emitter connected to scattering vertex `from`, known unoccluded.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct LightVertex {
+    /// Index in [`PathRecord::vertices`] of the scattering vertex it lights.
+    pub from: usize,
+    /// Emitter index in [`Scene::emitters`].
+    pub emitter: usize,
+    /// Point on the emitter (for the environment, the unit direction).
+    pub p: glam::Vec3,
+    /// Emitter normal at `p` (unused for the environment).
+    pub n: glam::Vec3,
+    /// Detached density per unit area of `p` (per steradian for the environment), including the
+    /// probability of choosing this emitter.
+    pub pdf: f32,
+    /// MIS weight against BSDF sampling.
+    pub mis: f32,
+}
+
+/// One camera sample's path.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PathRecord {
+    /// Camera origin (the vertex `x0`).
+    pub camera: glam::Vec3,
+    /// The BSDF-sampled chain `x1, x2, …`.
+    pub vertices: Vec<PathVertex>,
+    /// Next-event samples, in the order of their `from` vertex.
+    pub lights: Vec<LightVertex>,
+}
+
+/// Counters kept while tracing.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct TraceCounters {
+    /// Rays (camera, shadow or continuation) whose sphere tracing ran out of steps.
+    pub exhausted: u64,
+}
+
+/// Whether anything blocks the segment `ray.o + t ray.d`, `t ∈ (0, t_max)`. The emitter `skip` (the one
+/// being connected to) is not tested: its own sampled point faces the reference, so it cannot occlude it.
+/// Exhausted traces count as unoccluded (as misses, like [`Scene::intersect`]).
+pub fn occluded(
+    scene: &Scene,
+    ray: &Ray,
+    t_max: f32,
+    skip: Option<usize>,
+    counters: &mut TraceCounters,
+) -> bool {
+    for &i in &scene.finite_emitters {
+        if Some(i) != skip && scene.emitters[i].emitter.intersect(ray, t_max).is_some() {
+            return true;
+        }
+    }
+    for shape in &scene.shapes {
+        let Some((t0, t1)) = shape.bounds.clip(ray, 0.0, t_max) else {
+            continue;
+        };
+        match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &scene.trace) {
+            ShapeTrace::Hit(t) if t < t_max => return true,
+            ShapeTrace::Exhausted(_) => counters.exhausted += 1,
+            _ => {}
+        }
+    }
+    false
+}
+
+/// What a ray sees, when only emission along it matters (the last segment of a path).
+enum Next {
+    /// The first surface along the ray.
+    Surface(Hit),
+    /// Nothing: the ray escapes to the environment (if any).
+    Escape,
+    /// Something that does not emit blocks the ray.
+    Blocked,
+}
+
+/// The nearest emitter along `ray`, tested for occlusion by shapes; shapes are traced only up to the
+/// emitter, or not at all when no emitter is hit and the scene has no environment (a segment that can
+/// carry no light costs no sphere tracing). Equivalent to [`Scene::intersect`] followed by discarding
+/// shape hits.
+fn emission_along(scene: &Scene, ray: &Ray, counters: &mut TraceCounters) -> Next {
+    let mut best: Option<(f32, glam::Vec3, usize)> = None;
+    for &i in &scene.finite_emitters {
+        let t_max = best.map_or(f32::INFINITY, |b| b.0);
+        if let Some((t, n)) = scene.emitters[i].emitter.intersect(ray, t_max) {
+            best = Some((t, n, i));
+        }
+    }
+    match best {
+        Some((t, n, i)) => {
+            if occluded(scene, ray, t, Some(i), counters) {
+                Next::Blocked
+            } else {
+                Next::Surface(Hit {
+                    t,
+                    p: ray.at(t),
+                    n,
+                    surface: Surface::Emitter(i),
+                })
+            }
+        }
+        None if scene.environment.is_none() => Next::Blocked,
+        None => {
+            if occluded(scene, ray, f32::INFINITY, None, counters) {
+                Next::Blocked
+            } else {
+                Next::Escape
+            }
+        }
+    }
+}
+
+/// Density per steradian, including the selection probability, with which next-event estimation from
+/// `reference` would have produced the point `p` (normal `n`) of emitter `emitter` in direction `wi`.
+#[inline]
+pub fn light_pdf(
+    scene: &Scene,
+    emitter: usize,
+    reference: glam::Vec3,
+    wi: glam::Vec3,
+    p: glam::Vec3,
+    n: glam::Vec3,
+) -> f32 {
+    let select = 1.0 / scene.emitters.len() as f32;
+    select * scene.emitters[emitter].emitter.pdf_li(reference, wi, p, n)
+}
+
+/// One next-event sample from the scattering point `p` (normal `n`, outgoing `wo`, shape `shape`):
+/// picks an emitter uniformly with `u_pick`, samples it with `u`, tests visibility. `None` when the
+/// sample carries no light (no emitter, back side, zero BSDF, occluded). `from` is stored in the result.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_light(
+    scene: &Scene,
+    from: usize,
+    shape: usize,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    wo: glam::Vec3,
+    u_pick: f32,
+    u: glam::Vec2,
+    counters: &mut TraceCounters,
+) -> Option<LightVertex> {
+    let count = scene.emitters.len();
+    if count == 0 {
+        return None;
+    }
+    let k = ((u_pick * count as f32) as usize).min(count - 1);
+    let emitter = &scene.emitters[k].emitter;
+    let es = emitter.sample_li(p, u)?;
+    let bsdf = &scene.shapes[shape].bsdf;
+    let bsdf_pdf = bsdf.pdf(n, wo, es.wi);
+    let f = bsdf.eval::<f32>(n.into(), es.wi.into(), wo.into());
+    if f.x <= 0.0 && f.y <= 0.0 && f.z <= 0.0 {
+        return None;
+    }
+    let select = 1.0 / count as f32;
+    let pdf_w = select * es.pdf;
+    let o = scene.offset_origin(p, n, es.wi);
+    let infinite = emitter.is_infinite();
+    let (t_max, pdf) = if infinite {
+        (f32::INFINITY, pdf_w)
+    } else {
+        // Per unit area at the light: p_ω |cos θ_y| / d² (the inverse of the solid-angle conversion).
+        let to = es.p - p;
+        let pdf_a = pdf_w * es.n.dot(es.wi).abs() / to.length_squared();
+        ((es.p - o).dot(es.wi) * (1.0 - 1e-4), pdf_a)
+    };
+    if !(pdf > 0.0 && pdf.is_finite()) {
+        return None;
+    }
+    let ray = Ray::new(o, es.wi);
+    let skip = (!infinite).then_some(k);
+    if occluded(scene, &ray, t_max, skip, counters) {
+        return None;
+    }
+    Some(LightVertex {
+        from,
+        emitter: k,
+        p: if infinite { es.wi } else { es.p },
+        n: es.n,
+        pdf,
+        mis: power_heuristic(pdf_w, bsdf_pdf),
+    })
+}
+
+/// Traces the camera ray `ray` in `f32` and records its path: up to `max_scatter` scattering vertices,
+/// each with one light sample and one BSDF sample. Draws from `sampler` in a fixed order per vertex
+/// (emitter choice, light point, BSDF direction).
+pub fn trace_path(
+    scene: &Scene,
+    ray: Ray,
+    max_scatter: u32,
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) {
+    record.camera = ray.o;
+    record.vertices.clear();
+    record.lights.clear();
+    let mut ray = ray;
+    // The BSDF density (per steradian) of the current ray; `None` for the camera ray.
+    let mut bsdf_pdf: Option<f32> = None;
+    let mut prev = ray.o;
+    let mut scatter = 0;
+    loop {
+        // After the last scattering vertex only emission along the ray counts.
+        let next = if scatter >= max_scatter {
+            emission_along(scene, &ray, counters)
+        } else {
+            match scene.intersect(&ray, f32::INFINITY) {
+                Intersection::Hit(h) => Next::Surface(h),
+                Intersection::Miss => Next::Escape,
+                Intersection::Exhausted => {
+                    counters.exhausted += 1;
+                    Next::Escape
+                }
+            }
+        };
+        let hit = match next {
+            Next::Surface(h) => Some(h),
+            Next::Escape => None,
+            Next::Blocked => return,
+        };
+        let Some(h) = hit else {
+            if let Some(env) = scene.environment {
+                let (pdf, mis) = match bsdf_pdf {
+                    None => (1.0, 1.0),
+                    Some(pb) => {
+                        let pl = light_pdf(scene, env, prev, ray.d, prev + ray.d, -ray.d);
+                        (pb, power_heuristic(pb, pl))
+                    }
+                };
+                record.vertices.push(PathVertex {
+                    p: ray.d,
+                    n: -ray.d,
+                    kind: VertexKind::Environment(env),
+                    pdf,
+                    mis,
+                });
+            }
+            return;
+        };
+        let pdf = match bsdf_pdf {
+            None => 1.0,
+            Some(pb) => pb * h.n.dot(ray.d).abs() / (h.p - prev).length_squared(),
+        };
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return;
+        }
+        match h.surface {
+            Surface::Emitter(i) => {
+                let mis = match bsdf_pdf {
+                    None => 1.0,
+                    Some(pb) => power_heuristic(pb, light_pdf(scene, i, prev, ray.d, h.p, h.n)),
+                };
+                record.vertices.push(PathVertex {
+                    p: h.p,
+                    n: h.n,
+                    kind: VertexKind::Emitter(i),
+                    pdf,
+                    mis,
+                });
+                return;
+            }
+            Surface::Shape(s) => {
+                let index = record.vertices.len();
+                record.vertices.push(PathVertex {
+                    p: h.p,
+                    n: h.n,
+                    kind: VertexKind::Shape(s),
+                    pdf,
+                    mis: 0.0,
+                });
+                if scatter >= max_scatter {
+                    return;
+                }
+                scatter += 1;
+                let wo = -ray.d;
+                let u_pick = sampler.next_1d();
+                let u_light = sampler.next_2d();
+                let u_bsdf = sampler.next_2d();
+                if let Some(lv) =
+                    sample_light(scene, index, s, h.p, h.n, wo, u_pick, u_light, counters)
+                {
+                    record.lights.push(lv);
+                }
+                let Some(bs) = scene.shapes[s].bsdf.sample(h.n, wo, u_bsdf) else {
+                    return;
+                };
+                bsdf_pdf = Some(bs.pdf);
+                prev = h.p;
+                ray = Ray::new(scene.offset_origin(h.p, h.n, bs.wi), bs.wi);
+            }
+        }
+    }
+}
+
+/// Positions and normals of recorded vertices as constants (the image pass).
+#[inline]
+pub fn detached<S: Scalar>(p: glam::Vec3, n: glam::Vec3) -> (Vec3<S>, Vec3<S>) {
+    (Vec3::constant(p), Vec3::constant(n))
+}
+
+/// The contribution `f(x̄) / p(x̄)` of a recorded path (with its next-event branches), evaluated in `S`.
+///
+/// `attach(p, n)` gives each finite vertex's position and normal in `S` (use [`detached`] for the image);
+/// it is applied to the camera, the chain vertices and the light points, not to directions at infinity.
+pub fn contribution<S: Scalar>(
+    scene: &Scene,
+    record: &PathRecord,
+    attach: impl Fn(glam::Vec3, glam::Vec3) -> (Vec3<S>, Vec3<S>),
+) -> Vec3<S> {
+    let mut radiance = Vec3::<S>::zero();
+    let mut beta = Vec3::splat(S::one());
+    let (mut prev_p, _) = attach(record.camera, glam::Vec3::ZERO);
+    // The previous scattering vertex: (position, normal, outgoing direction, shape index).
+    type Scatter<S> = (Vec3<S>, Vec3<S>, Vec3<S>, usize);
+    let mut scatter: Option<Scatter<S>> = None;
+    let mut lights = record.lights.iter().peekable();
+    for (i, v) in record.vertices.iter().enumerate() {
+        match v.kind {
+            VertexKind::Environment(e) => {
+                let w = Vec3::<S>::constant(v.p);
+                if let Some((_, xn, wo, s)) = scatter {
+                    let f = scene.shapes[s].bsdf.eval(xn, w, wo);
+                    beta = beta * f * (abs_cos(xn, w) / v.pdf);
+                }
+                let le = scene.emitters[e].emitter.emitted(prev_p, -w, -w);
+                radiance += beta * le * S::constant(v.mis);
+                return radiance;
+            }
+            VertexKind::Emitter(e) | VertexKind::Shape(e) => {
+                let (x, n) = attach(v.p, v.n);
+                if let Some((xp, xn, wo, s)) = scatter {
+                    let f = scene.shapes[s].bsdf.eval(xn, direction(xp, x), wo);
+                    beta = beta * f * (geometry_term(xp, xn, x, n) / v.pdf);
+                }
+                let wo = direction(x, prev_p);
+                if let VertexKind::Emitter(_) = v.kind {
+                    let le = scene.emitters[e].emitter.emitted(x, n, wo);
+                    radiance += beta * le * S::constant(v.mis);
+                    return radiance;
+                }
+                let s = e;
+                while let Some(l) = lights.next_if(|l| l.from == i) {
+                    let emitter = &scene.emitters[l.emitter].emitter;
+                    let bsdf = &scene.shapes[s].bsdf;
+                    let contrib = if emitter.is_infinite() {
+                        let w = Vec3::<S>::constant(l.p);
+                        bsdf.eval(n, w, wo) * (abs_cos(n, w) / l.pdf) * emitter.emitted(x, -w, -w)
+                    } else {
+                        let (y, ny) = attach(l.p, l.n);
+                        let wl = direction(x, y);
+                        bsdf.eval(n, wl, wo)
+                            * (geometry_term(x, n, y, ny) / l.pdf)
+                            * emitter.emitted(y, ny, -wl)
+                    };
+                    radiance += beta * contrib * S::constant(l.mis);
+                }
+                scatter = Some((x, n, wo, s));
+                prev_p = x;
+            }
+        }
+    }
+    radiance
+}
