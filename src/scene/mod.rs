@@ -192,10 +192,27 @@ impl Scene {
         }
     }
 
-    /// Origin offset that moves a ray start off the surface at `p` with normal `n`, towards `w`.
+    /// The interval of `ray` in `(0, t_max)` where `shape` must be traced: its bounds grown by a margin.
+    ///
+    /// Bounds may be tight (a box's faces lie on them): a ray entering exactly on the surface would start
+    /// its trace at `φ = 0`, where the tracer cannot tell entering from leaving. The margin starts it
+    /// outside.
+    #[inline]
+    pub fn trace_interval(&self, shape: &Shape, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
+        shape
+            .bounds
+            .expanded(4.0 * self.trace.eps)
+            .clip(ray, 0.0, t_max)
+    }
+
+    /// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: `p` moved off the surface by
+    /// `4 eps` to `w`'s side, but never by less than about 32 ulps of `p`'s largest coordinate, so that a
+    /// tolerance too small for the coordinates (a tiny finite extent next to unbounded shapes) cannot
+    /// make a ray start inside the surface noise and hit its own origin.
     #[inline]
     pub fn offset_origin(&self, p: glam::Vec3, n: glam::Vec3, w: glam::Vec3) -> glam::Vec3 {
-        let side = if n.dot(w) >= 0.0 { 1.0 } else { -1.0 };
-        p + n * (side * 4.0 * self.trace.eps)
+        let floor = p.abs().max_element() * (32.0 * f32::EPSILON);
+        let offset = (4.0 * self.trace.eps).max(floor);
+        p + n * if n.dot(w) >= 0.0 { offset } else { -offset }
     }
 }
