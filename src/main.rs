@@ -7,7 +7,7 @@
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use implicit_psdr::integrator::{self, RenderOptions};
-use implicit_psdr::{film, scene};
+use implicit_psdr::{film, scene, sdf};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -203,26 +203,4 @@ fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
         bbox_max.z
     );
     Ok(())
-}
-
-/// Temporary stand-ins until `implicit_psdr::sdf::{bake, write_npy}` are merged (the sdf module owns
-/// them); they fail with an error instead of panicking.
-mod sdf {
-    use implicit_psdr::sdf::{GridData, Sdf};
-    use implicit_psdr::{Error, Result};
-    use std::path::Path;
-
-    pub fn bake(_sdf: &Sdf, _min: glam::Vec3, _max: glam::Vec3, _res: usize) -> GridData {
-        GridData {
-            dims: [0; 3],
-            values: Vec::new(),
-        }
-    }
-
-    pub fn write_npy(path: &Path, _grid: &GridData) -> Result<()> {
-        Err(Error::file(
-            path,
-            "baking is not available yet (sdf::bake / sdf::write_npy not merged)",
-        ))
-    }
 }

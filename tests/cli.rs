@@ -222,7 +222,6 @@ fn unwritable_output_fails_before_rendering() {
 }
 
 #[test]
-#[ignore = "needs Sdf::bounds (merge main once the sdf branch lands)"]
 fn bake_rejects_unknown_and_unbounded_shapes() {
     let dir = workdir("bake-bad");
     let text = scene(|v| {
@@ -251,7 +250,6 @@ fn bake_rejects_unknown_and_unbounded_shapes() {
 }
 
 #[test]
-#[ignore = "needs the rendering pipeline (merge main once it lands)"]
 fn tiny_render_writes_both_files() {
     let dir = workdir("render-ok");
     std::fs::write(dir.join("scene.json"), scene(|_| {})).unwrap();
@@ -278,7 +276,6 @@ fn tiny_render_writes_both_files() {
 }
 
 #[test]
-#[ignore = "needs crate::sdf::{bake, write_npy, read_npy} (merge main once they land)"]
 fn bake_then_render_grid() {
     let dir = workdir("bake-ok");
     std::fs::write(dir.join("scene.json"), scene(|_| {})).unwrap();

@@ -83,7 +83,6 @@ fn scenes_dir() -> PathBuf {
 }
 
 #[test]
-#[ignore = "needs Sdf::bounds (merge main once the sdf branch lands)"]
 fn example_scenes_parse() {
     let mut count = 0;
     for entry in std::fs::read_dir(scenes_dir()).unwrap() {
@@ -102,7 +101,6 @@ fn example_scenes_parse() {
 }
 
 #[test]
-#[ignore = "needs Sdf::bounds (merge main once the sdf branch lands)"]
 fn base_scene_maps_fields_and_defaults() {
     let scene = parse(&base()).unwrap();
     assert_eq!(scene.spp, 64);
@@ -607,7 +605,6 @@ fn bad_grid_files_name_field_and_file() {
 }
 
 #[test]
-#[ignore = "needs crate::sdf::read_npy (merge main once the sdf branch lands)"]
 fn good_grid_file_loads() {
     let dir = std::env::temp_dir().join(format!("psdr-grid-good-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::IntegratorKind;
 use crate::scalar::{Param, Param3};
-use crate::sdf::{GridData, Sdf};
+use crate::sdf::{GridData, Sdf, read_npy};
 use glam::Vec3;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
@@ -747,15 +747,13 @@ fn camera(v: &Value, path: &str) -> Result<Camera> {
             ));
         }
     };
-    Ok(Camera {
-        origin: origin.into(),
-        target: target.into(),
-        up: up.into(),
-        fov_y: fov_y.into(),
-        width,
-        height,
-        filter,
-    })
+    let camera = Camera::new(origin, target, up, fov_y, width, height, filter);
+    // The checks above name the fields; this catches anything the camera needs that they missed.
+    camera.validate().map_err(|e| match e {
+        Error::Field { field, message } => Error::field(join(path, &field), message),
+        e => e,
+    })?;
+    Ok(camera)
 }
 
 fn integrator(v: &Value, path: &str) -> Result<IntegratorKind> {
@@ -816,13 +814,4 @@ fn check_grid(data: &GridData) -> std::result::Result<(), String> {
         return Err(format!("value {i} is not finite ({})", data.values[i]));
     }
     Ok(())
-}
-
-/// Reads a grid `.npy`. Temporary stand-in until `crate::sdf::read_npy` is merged (the sdf helper owns
-/// the format); it reports an error instead of panicking.
-fn read_npy(path: &Path) -> Result<GridData> {
-    Err(Error::file(
-        path,
-        "reading .npy grids is not available yet (crate::sdf::read_npy not merged)",
-    ))
 }
