@@ -506,6 +506,15 @@ fn syntax_errors_give_line_and_column() {
 }
 
 #[test]
+fn duplicate_keys_are_rejected() {
+    let text = base()
+        .to_string()
+        .replace("\"radius\":1.0", "\"radius\":1.0,\"radius\":2.0");
+    let e = scene::parse(&text, Path::new(".")).unwrap_err().to_string();
+    assert_contains(&e, "duplicate key \"radius\" at line 1 column");
+}
+
+#[test]
 fn load_names_the_file() {
     let dir = std::env::temp_dir().join(format!("psdr-scene-parse-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
