@@ -634,3 +634,20 @@ fn good_grid_file_loads() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn example_scenes_render_lit_images() {
+    // Catches scenes whose lights miss everything: the mean must be well above zero, and no pixel may
+    // be non-finite. 2 spp keeps this quick; the mean over thousands of pixels is stable enough.
+    for name in ["sphere_floor", "csg", "environment", "grid"] {
+        let scene = scene::load(&scenes_dir().join(format!("{name}.json"))).unwrap();
+        let options = implicit_psdr::integrator::RenderOptions {
+            spp: 2,
+            ..Default::default()
+        };
+        let (image, _) = implicit_psdr::integrator::render(&scene, &options);
+        assert!(image.rgb.iter().all(|v| v.is_finite()), "{name}");
+        let mean = image.rgb.iter().sum::<f32>() / image.rgb.len() as f32;
+        assert!(mean > 0.01, "{name}: mean {mean}");
+    }
+}
