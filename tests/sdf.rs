@@ -400,6 +400,19 @@ fn primitive_values_match_closed_forms() {
 }
 
 #[test]
+fn sphere_centre_has_a_defined_normal() {
+    let c = Vec3::new(0.5, -1.0, 2.0);
+    let s = Sdf::sphere(c, 1.0);
+    assert_eq!(s.gradient(c), Vec3::ZERO);
+    assert_eq!(s.ad_gradient(c), Vec3::ZERO);
+    assert_eq!(s.normal(c), Vec3::Z);
+    assert_eq!(s.curvature(c), 0.0);
+    // Inside a box at its centre: a face direction, not NaN.
+    let b = Sdf::cuboid(c, Vec3::ONE, 0.2);
+    assert!((b.normal(c).length() - 1.0).abs() < 1e-6);
+}
+
+#[test]
 fn transform_rotates_scales_and_translates() {
     // A box of half extents (2, 1, 1) turned 90° about z has half extents (1, 2, 1).
     let b = Sdf::cuboid(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0), 0.0);

@@ -6,6 +6,21 @@
 //! generically ([`Sdf::eval`]) so that the same code gives values in `f32`, gradients with
 //! [`crate::scalar::DualVec3`], Hessians with [`crate::scalar::Dual2Vec3`] and parameter derivatives with
 //! `Dual32`.
+//!
+//! Layout: exact-distance primitives (`primitives.rs`), hard CSG and the cubic smooth union (`csg.rs`),
+//! similarity transforms (`transform.rs`), B-spline grids (`grid.rs`), `.npy` I/O (`npy.rs`) and baking
+//! any node onto a grid (`bake.rs`).
+//!
+//! Smoothness, which the curvature and the boundary terms care about: sphere, torus, capsule and plane
+//! are smooth (C∞) off their medial axes; rounded boxes and cylinders are C1 (the curvature jumps where a
+//! flat face meets a rounded edge) and creased when `rounding = 0`; hard CSG creases where the active
+//! child switches; the smooth union is C2; grids are C2 everywhere.
+//!
+//! Grids: the samples are the *control points* of a uniform cubic B-spline, which approximates rather than
+//! interpolates: the surface is offset by about `h²/6 ∇²φ` (`h²/(3r)` for a sphere of radius `r`), in
+//! exchange for C2 continuity. Faces use a linearly extrapolated ghost layer (no bias for linear fields);
+//! outside the box `φ = φ(clamp(x)) + |x − clamp(x)|`. The Lipschitz bound is exact for the spline's
+//! per-axis differences, `sqrt(Σ L_a² + max(0, 1 − min L_a²))`, about `√3` for a sampled distance field.
 
 mod bake;
 mod csg;
@@ -119,7 +134,8 @@ pub enum Sdf {
         /// The transformed node.
         child: Box<Sdf>,
     },
-    /// Samples over the box `[bbox_min, bbox_max]`, interpolated with C2 cubic B-splines.
+    /// Samples over the box `[bbox_min, bbox_max]`, the control points of a C2 cubic B-spline (see the
+    /// module notes: it approximates the samples with an `O(h²)` smoothing).
     Grid {
         /// The samples (shared: grids can be large).
         data: Arc<GridData>,
