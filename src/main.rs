@@ -4,10 +4,10 @@
 //! errors). Everything is validated before rendering, and outputs are written to a temporary file and
 //! renamed, so a failed run leaves no partial output.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use implicit_psdr::integrator::{self, RenderOptions};
-use implicit_psdr::{film, scene};
+use implicit_psdr::{film, scene, sdf};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -57,7 +57,17 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help and --version: clap prints them to stdout and exits with 0.
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("{} (see --help)", one_line_usage_error(&e));
+            return ExitCode::from(2);
+        }
+    };
     // A panic is a bug, but the contract of the tool still holds: one line on stderr (the first panic
     // only: rayon workers may panic together), exit code 2, no output file (outputs are written last).
     std::panic::set_hook(Box::new(|info| {
@@ -98,6 +108,28 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// clap's message without its usage block, on one line: "error: unexpected argument '--sp' found".
+fn one_line_usage_error(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let message: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.starts_with("Usage:"))
+        .map(str::trim)
+        .filter(|l| {
+            !(l.is_empty() || l.starts_with("tip:") || l.starts_with("For more information"))
+        })
+        .collect();
+    message.join(" ")
+}
+
+/// Loads a scene; field errors get the scene file in front (file errors name their file already).
+fn load_scene(path: &Path) -> Result<scene::Scene> {
+    scene::load(path).map_err(|e| match e {
+        implicit_psdr::Error::Field { .. } => anyhow::anyhow!("{}: {e}", path.display()),
+        e => e.into(),
+    })
+}
+
 /// Fails unless `path`'s folder exists, so that a long render cannot end in an unwritable output.
 fn check_output(path: &Path, what: &str) -> Result<()> {
     let dir = match path.parent() {
@@ -123,7 +155,7 @@ fn render(scene_path: &Path, spp: Option<u32>, seed: u64, out: &Path, png: &Path
     if out == png {
         bail!("--out and --png name the same file {}", out.display());
     }
-    let scene = scene::load(scene_path).with_context(|| scene_path.display().to_string())?;
+    let scene = load_scene(scene_path)?;
     let options = RenderOptions {
         spp: spp.unwrap_or(scene.spp),
         seed,
@@ -168,7 +200,7 @@ const BAKE_PADDING: f32 = 0.1;
 
 fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
     check_output(out, "--out")?;
-    let scene = scene::load(scene_path).with_context(|| scene_path.display().to_string())?;
+    let scene = load_scene(scene_path)?;
     let Some(shape) = scene.shapes.iter().find(|s| s.name == name) else {
         let names: Vec<&str> = scene.shapes.iter().map(|s| s.name.as_str()).collect();
         bail!(
@@ -203,26 +235,4 @@ fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
         bbox_max.z
     );
     Ok(())
-}
-
-/// Temporary stand-ins until `implicit_psdr::sdf::{bake, write_npy}` are merged (the sdf module owns
-/// them); they fail with an error instead of panicking.
-mod sdf {
-    use implicit_psdr::sdf::{GridData, Sdf};
-    use implicit_psdr::{Error, Result};
-    use std::path::Path;
-
-    pub fn bake(_sdf: &Sdf, _min: glam::Vec3, _max: glam::Vec3, _res: usize) -> GridData {
-        GridData {
-            dims: [0; 3],
-            values: Vec::new(),
-        }
-    }
-
-    pub fn write_npy(path: &Path, _grid: &GridData) -> Result<()> {
-        Err(Error::file(
-            path,
-            "baking is not available yet (sdf::bake / sdf::write_npy not merged)",
-        ))
-    }
 }

@@ -83,7 +83,6 @@ fn scenes_dir() -> PathBuf {
 }
 
 #[test]
-#[ignore = "needs Sdf::bounds (merge main once the sdf branch lands)"]
 fn example_scenes_parse() {
     let mut count = 0;
     for entry in std::fs::read_dir(scenes_dir()).unwrap() {
@@ -102,7 +101,6 @@ fn example_scenes_parse() {
 }
 
 #[test]
-#[ignore = "needs Sdf::bounds (merge main once the sdf branch lands)"]
 fn base_scene_maps_fields_and_defaults() {
     let scene = parse(&base()).unwrap();
     assert_eq!(scene.spp, 64);
@@ -508,6 +506,15 @@ fn syntax_errors_give_line_and_column() {
 }
 
 #[test]
+fn duplicate_keys_are_rejected() {
+    let text = base()
+        .to_string()
+        .replace("\"radius\":1.0", "\"radius\":1.0,\"radius\":2.0");
+    let e = scene::parse(&text, Path::new(".")).unwrap_err().to_string();
+    assert_contains(&e, "duplicate key \"radius\" at line 1 column");
+}
+
+#[test]
 fn load_names_the_file() {
     let dir = std::env::temp_dir().join(format!("psdr-scene-parse-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -607,7 +614,6 @@ fn bad_grid_files_name_field_and_file() {
 }
 
 #[test]
-#[ignore = "needs crate::sdf::read_npy (merge main once the sdf branch lands)"]
 fn good_grid_file_loads() {
     let dir = std::env::temp_dir().join(format!("psdr-grid-good-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -627,4 +633,21 @@ fn good_grid_file_loads() {
         other => panic!("expected a grid, got {other:?}"),
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn example_scenes_render_lit_images() {
+    // Catches scenes whose lights miss everything: the mean must be well above zero, and no pixel may
+    // be non-finite. 2 spp keeps this quick; the mean over thousands of pixels is stable enough.
+    for name in ["sphere_floor", "csg", "environment", "grid"] {
+        let scene = scene::load(&scenes_dir().join(format!("{name}.json"))).unwrap();
+        let options = implicit_psdr::integrator::RenderOptions {
+            spp: 2,
+            ..Default::default()
+        };
+        let (image, _) = implicit_psdr::integrator::render(&scene, &options);
+        assert!(image.rgb.iter().all(|v| v.is_finite()), "{name}");
+        let mean = image.rgb.iter().sum::<f32>() / image.rgb.len() as f32;
+        assert!(mean > 0.01, "{name}: mean {mean}");
+    }
 }

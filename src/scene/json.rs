@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::IntegratorKind;
 use crate::scalar::{Param, Param3};
-use crate::sdf::{GridData, Sdf};
+use crate::sdf::{GridData, Sdf, read_npy};
 use glam::Vec3;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
@@ -67,13 +67,79 @@ const JSON_SOURCE: &str = "scene JSON";
 /// Parses and validates scene JSON; `base_dir` resolves relative file names.
 pub fn parse(json: &str, base_dir: &Path) -> Result<Scene> {
     // serde_json's message is one line and ends with "at line L column C".
-    let root: Value = serde_json::from_str(json).map_err(|e| Error::file(JSON_SOURCE, e))?;
+    let StrictValue(root) = serde_json::from_str(json).map_err(|e| Error::file(JSON_SOURCE, e))?;
     let mut cx = Context {
         base_dir,
         names: HashMap::new(),
     };
     let scene = cx.scene(&root)?;
     Ok(scene.build())
+}
+
+/// A [`Value`] read with duplicate object keys rejected (serde_json keeps the last one silently, which
+/// would hide a mistake such as two `"radius"` fields). The error carries the line and column.
+struct StrictValue(Value);
+
+impl<'de> serde::Deserialize<'de> for StrictValue {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(StrictVisitor)
+    }
+}
+
+struct StrictVisitor;
+
+impl<'de> serde::de::Visitor<'de> for StrictVisitor {
+    type Value = StrictValue;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(Value::Bool(v)))
+    }
+    fn visit_i64<E>(self, v: i64) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(v.into()))
+    }
+    fn visit_u64<E>(self, v: u64) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(v.into()))
+    }
+    fn visit_f64<E>(self, v: f64) -> std::result::Result<StrictValue, E> {
+        // JSON cannot spell NaN or infinity, so `from` never yields null here.
+        Ok(StrictValue(v.into()))
+    }
+    fn visit_str<E>(self, v: &str) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(Value::String(v.to_string())))
+    }
+    fn visit_string<E>(self, v: String) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(Value::String(v)))
+    }
+    fn visit_unit<E>(self) -> std::result::Result<StrictValue, E> {
+        Ok(StrictValue(Value::Null))
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(
+        self,
+        mut seq: A,
+    ) -> std::result::Result<StrictValue, A::Error> {
+        let mut items = Vec::new();
+        while let Some(StrictValue(v)) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(StrictValue(Value::Array(items)))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(
+        self,
+        mut map: A,
+    ) -> std::result::Result<StrictValue, A::Error> {
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!("duplicate key {key:?}")));
+            }
+            let StrictValue(v) = map.next_value()?;
+            out.insert(key, v);
+        }
+        Ok(StrictValue(Value::Object(out)))
+    }
 }
 
 /// A validated scene whose shapes are not built yet ([`Shape::new`] evaluates the SDF's bounds, which
@@ -747,15 +813,13 @@ fn camera(v: &Value, path: &str) -> Result<Camera> {
             ));
         }
     };
-    Ok(Camera {
-        origin: origin.into(),
-        target: target.into(),
-        up: up.into(),
-        fov_y: fov_y.into(),
-        width,
-        height,
-        filter,
-    })
+    let camera = Camera::new(origin, target, up, fov_y, width, height, filter);
+    // The checks above name the fields; this catches anything the camera needs that they missed.
+    camera.validate().map_err(|e| match e {
+        Error::Field { field, message } => Error::field(join(path, &field), message),
+        e => e,
+    })?;
+    Ok(camera)
 }
 
 fn integrator(v: &Value, path: &str) -> Result<IntegratorKind> {
@@ -816,13 +880,4 @@ fn check_grid(data: &GridData) -> std::result::Result<(), String> {
         return Err(format!("value {i} is not finite ({})", data.values[i]));
     }
     Ok(())
-}
-
-/// Reads a grid `.npy`. Temporary stand-in until `crate::sdf::read_npy` is merged (the sdf helper owns
-/// the format); it reports an error instead of panicking.
-fn read_npy(path: &Path) -> Result<GridData> {
-    Err(Error::file(
-        path,
-        "reading .npy grids is not available yet (crate::sdf::read_npy not merged)",
-    ))
 }
