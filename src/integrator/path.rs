@@ -99,8 +99,11 @@ pub fn occluded(
             return true;
         }
     }
+    // Bounds may be tight (a box's faces lie on them): a ray entering exactly on the surface would start
+    // its trace at φ = 0, where the tracer cannot tell entering from leaving. The margin starts it outside.
+    let margin = 4.0 * scene.trace.eps;
     for shape in &scene.shapes {
-        let Some((t0, t1)) = shape.bounds.clip(ray, 0.0, t_max) else {
+        let Some((t0, t1)) = shape.bounds.expanded(margin).clip(ray, 0.0, t_max) else {
             continue;
         };
         match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &scene.trace) {
