@@ -189,62 +189,17 @@ fn form_factor_closed_form_sanity() {
 fn rectangle_light_irradiance_matches_form_factor() {
     let (l, rho, h) = (5.0f32, 0.7f32, 1.3f32);
     let (cx, cz, a, b) = (0.4f32, -0.2f32, 1.0f32, 2.0f32);
-    let light = Emitter::Rectangle {
-        center: Param3::new([cx, h, cz]),
-        normal: -G3::Y,
-        u: G3::X,
-        size: [Param::new(a), Param::new(b)],
-        radiance: Param3::new([l; 3]),
-    };
-    let cam = camera([0.3, 0.5, 0.4], [0.0, 0.0, 0.0], 40.0, 4, 4);
-    let mut scene = Scene::new(
-        cam,
-        IntegratorKind::Direct,
-        1,
-        vec![],
-        vec![named("light", light)],
-    );
-    // The patch's shape is never traced (its bounds lie away from every shadow ray).
-    scene.shapes.push(Shape {
-        name: "patch".into(),
-        sdf: Sdf::Sphere {
-            center: Param3::new([0.0, -10.0, 0.0]),
-            radius: Param::new(0.1),
+    let scene = nee_scene(
+        Emitter::Rectangle {
+            center: Param3::new([cx, h, cz]),
+            normal: -G3::Y,
+            u: G3::X,
+            size: [Param::new(a), Param::new(b)],
+            radiance: Param3::new([l; 3]),
         },
-        bsdf: diffuse(rho),
-        bounds: Aabb::around(G3::new(0.0, -10.0, 0.0), G3::splat(0.1)),
-        lipschitz: 1.0,
-    });
-    let (p, n) = (G3::ZERO, G3::Y);
-    let wo = (G3::new(0.3, 0.5, 0.4) - p).normalize();
-    let mut counters = TraceCounters::default();
-    let m = 200;
-    let mut sum = 0.0f64;
-    let mut record = PathRecord {
-        camera: G3::new(0.3, 0.5, 0.4),
-        vertices: vec![PathVertex {
-            p,
-            n,
-            kind: VertexKind::Shape(0),
-            pdf: 1.0,
-            mis: 0.0,
-        }],
-        lights: vec![],
-    };
-    for i in 0..m {
-        for j in 0..m {
-            let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-            let lv = sample_light(&scene, 0, 0, p, n, wo, 0.5, u, &mut counters)
-                .expect("the light faces the point and nothing occludes it");
-            record.lights.clear();
-            // The estimator alone (no BSDF-sampling partner): weight 1.
-            record
-                .lights
-                .push(implicit_psdr::integrator::path::LightVertex { mis: 1.0, ..lv });
-            sum += contribution::<f32>(&scene, &record, detached).x as f64;
-        }
-    }
-    let estimate = sum / (m * m) as f64;
+        rho,
+    );
+    let estimate = nee_estimate(&scene, G3::ZERO, G3::Y, G3::new(0.3, 0.5, 0.4), 200);
     // The rectangle spans x ∈ cx ± a/2 and z ∈ cz ± b/2 at height h above the point.
     let f = point_to_rectangle_form_factor(
         (cx - a / 2.0) as f64,
@@ -258,7 +213,116 @@ fn rectangle_light_irradiance_matches_form_factor() {
         (estimate - exact).abs() < 2e-3 * exact,
         "{estimate} vs {exact} (F = {f})"
     );
-    assert_eq!(counters.exhausted, 0);
+    // Seen from behind, the one-sided rectangle gives nothing.
+    let behind = nee_estimate(
+        &scene,
+        G3::new(0.0, 2.0, 0.0),
+        G3::Y,
+        G3::new(0.0, 3.0, 0.5),
+        8,
+    );
+    assert_eq!(behind, 0.0);
+}
+
+/// A scene with one emitter and one diffuse "patch" shape whose surface is never traced (its bounds lie
+/// away from every shadow ray): the next-event estimator can be run at any point.
+fn nee_scene(emitter: Emitter, rho: f32) -> Scene {
+    let cam = camera([0.3, 0.5, 0.4], [0.0, 0.0, 0.0], 40.0, 4, 4);
+    let mut scene = Scene::new(
+        cam,
+        IntegratorKind::Direct,
+        1,
+        vec![],
+        vec![named("light", emitter)],
+    );
+    scene.shapes.push(Shape {
+        name: "patch".into(),
+        sdf: Sdf::Sphere {
+            center: Param3::new([0.0, -10.0, 0.0]),
+            radius: Param::new(0.1),
+        },
+        bsdf: diffuse(rho),
+        bounds: Aabb::around(G3::new(0.0, -10.0, 0.0), G3::splat(0.1)),
+        lipschitz: 1.0,
+    });
+    scene
+}
+
+/// Mean over `m²` stratified light samples of the next-event estimate (MIS weight forced to 1) of the
+/// radiance reflected by the patch at `p` (normal `n`) towards `camera`.
+fn nee_estimate(scene: &Scene, p: G3, n: G3, camera: G3, m: usize) -> f64 {
+    let wo = (camera - p).normalize();
+    let mut counters = TraceCounters::default();
+    let mut record = PathRecord {
+        camera,
+        vertices: vec![PathVertex {
+            p,
+            n,
+            kind: VertexKind::Shape(0),
+            pdf: 1.0,
+            mis: 0.0,
+        }],
+        lights: vec![],
+    };
+    let mut sum = 0.0f64;
+    for i in 0..m {
+        for j in 0..m {
+            let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
+            record.lights.clear();
+            if let Some(lv) = sample_light(scene, 0, 0, p, n, wo, 0.5, u, &mut counters) {
+                record
+                    .lights
+                    .push(implicit_psdr::integrator::path::LightVertex { mis: 1.0, ..lv });
+            }
+            sum += contribution::<f32>(scene, &record, detached).x as f64;
+        }
+    }
+    sum / (m * m) as f64
+}
+
+/// A sphere light wholly above the horizon gives the irradiance of a point source of intensity
+/// `π r² L`: `E = π L (r/d)² cos θ` (Nusselt analog; sin² of the half-angle is `(r/d)²`).
+#[test]
+fn sphere_light_irradiance_matches_closed_form() {
+    let (l, rho, r) = (3.0f32, 0.6f32, 0.5f32);
+    let c = G3::new(0.8, 2.0, -0.4);
+    let scene = nee_scene(
+        Emitter::Sphere {
+            center: Param3::new(c.to_array()),
+            radius: Param::new(r),
+            radiance: Param3::new([l; 3]),
+        },
+        rho,
+    );
+    let (p, n) = (G3::new(0.1, 0.0, 0.2), G3::Y);
+    let estimate = nee_estimate(&scene, p, n, G3::new(0.3, 0.5, 0.4), 200);
+    let d = c - p;
+    let cos = n.dot(d.normalize()) as f64;
+    let e = PI * l as f64 * (r as f64 / d.length() as f64).powi(2) * cos;
+    let exact = rho as f64 / PI * e;
+    assert!(
+        (estimate - exact).abs() < 2e-3 * exact,
+        "{estimate} vs {exact}"
+    );
+}
+
+/// An unoccluded point in a constant environment `L` receives `E = π L`.
+#[test]
+fn environment_irradiance_is_pi_l() {
+    let (l, rho) = (2.0f32, 0.4f32);
+    let scene = nee_scene(
+        Emitter::Constant {
+            radiance: Param3::new([l; 3]),
+        },
+        rho,
+    );
+    let n = G3::new(0.3, 0.9, -0.2).normalize();
+    let estimate = nee_estimate(&scene, G3::ZERO, n, n * 2.0 + G3::X, 400);
+    let exact = (rho * l) as f64;
+    assert!(
+        (estimate - exact).abs() < 5e-3 * exact,
+        "{estimate} vs {exact}"
+    );
 }
 
 /// The default scene of the issue: a sphere on a box floor under a rectangle light.
