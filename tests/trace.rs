@@ -197,7 +197,7 @@ fn all_hits_on_two_spheres_in_a_row() {
     let b = Vec3::new(3.0, 0.2, 0.0);
     let sdf_a = sphere(a.to_array(), 1.0);
     let sdf_b = sphere(b.to_array(), 0.8);
-    // The union written out by hand (min of the two), as the union node may not exist yet.
+    let union = Sdf::Union(vec![sdf_a.clone(), sdf_b.clone()]);
     let settings = TraceSettings::default();
     for i in 0..200u64 {
         let mut s = Sampler::new(4, 0, i, 0);
@@ -211,18 +211,26 @@ fn all_hits_on_two_spheres_in_a_row() {
         let (a0, a1) = sphere_roots(&ray, a, 1.0).unwrap();
         let (b0, b1) = sphere_roots(&ray, b, 0.8).unwrap();
         let expected = [a0, a1, b0, b1];
-        // Trace the union by tracing a tiny Sdf wrapper: min of two spheres via the generic evaluator is not
-        // available as a node here, so check each sphere and the merged, sorted list.
-        let mut hits = all_hits(&sdf_a, 1.0, &ray, 0.0, 20.0, &settings);
-        hits.extend(all_hits(&sdf_b, 1.0, &ray, 0.0, 20.0, &settings));
-        hits.sort_by(f32::total_cmp);
+        let hits = all_hits(&union, union.lipschitz(), &ray, 0.0, 20.0, &settings);
         assert_eq!(hits.len(), 4, "ray {i}: {hits:?}");
         for (h, e) in hits.iter().zip(expected) {
             assert!(
-                (*h as f64 - e).abs() < 1e-4,
+                (*h as f64 - e).abs() < 1e-5,
                 "ray {i}: {hits:?} vs {expected:?}"
             );
         }
+        // Each sphere alone gives its own pair; the first hit of the union is the first entry.
+        assert_eq!(all_hits(&sdf_a, 1.0, &ray, 0.0, 20.0, &settings).len(), 2);
+        assert_eq!(all_hits(&sdf_b, 1.0, &ray, 0.0, 20.0, &settings).len(), 2);
+        assert_eq!(
+            sphere_trace(&union, 1.0, &ray, 0.0, 20.0, &settings),
+            ShapeTrace::Hit(hits[0])
+        );
+        // Starting inside the second sphere: its exit only.
+        let mid = (0.5 * (b0 + b1)) as f32;
+        let rest = all_hits(&union, 1.0, &ray, mid, 20.0, &settings);
+        assert_eq!(rest.len(), 1);
+        assert!((rest[0] as f64 - b1).abs() < 1e-5);
     }
 }
 

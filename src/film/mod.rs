@@ -4,7 +4,7 @@ mod filter;
 mod output;
 
 pub use filter::Filter;
-pub use output::{write_exr, write_png};
+pub use output::{Channels, read_exr, srgb_encode, write_exr, write_png};
 
 /// A linear-RGB image, row-major from the top row, three `f32` per pixel.
 #[derive(Clone, Debug, PartialEq)]

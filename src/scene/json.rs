@@ -1,18 +1,828 @@
-//! The JSON scene format (see README): strict serde structs, then validation into [`Scene`] with
-//! field paths in every error.
+//! The JSON scene format (see README, "Scene format"): parsed at the edge into the rendering types, with
+//! the path of the offending field in every error.
+//!
+//! serde's derived deserialisers lose the field path in their errors and cannot express "unknown type
+//! `spere`, expected one of ..." per node, so the document is read into a [`serde_json::Value`] and
+//! walked by hand. Every object declares the keys it accepts before anything is read from it, so a
+//! misspelt key is reported as unknown (rather than as a missing correctly spelt one), which gives the
+//! strictness of `#[serde(deny_unknown_fields)]`. All validation happens before any rendering type that
+//! does work on construction ([`Shape::new`] computes bounds) is built.
 
-use super::Scene;
-use crate::error::Result;
+use super::{NamedEmitter, Scene, Shape};
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::emitter::Emitter;
+use crate::error::{Error, Result};
+use crate::film::Filter;
+use crate::integrator::IntegratorKind;
+use crate::scalar::{Param, Param3};
+use crate::sdf::{GridData, Sdf};
+use glam::Vec3;
+use serde_json::{Map, Value};
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
+
+/// Default samples per pixel when the scene gives none.
+pub const DEFAULT_SPP: u32 = 64;
+/// Default longest path of the path tracer when `max_depth` is absent.
+pub const DEFAULT_MAX_DEPTH: u32 = 5;
+/// Largest accepted image side, in pixels (guards against typos that would allocate gigabytes).
+pub const MAX_IMAGE_SIDE: u64 = 16384;
+
+/// The sdf node types, in the order error messages list them.
+const SDF_TYPES: &[&str] = &[
+    "sphere",
+    "box",
+    "torus",
+    "cylinder",
+    "capsule",
+    "plane",
+    "union",
+    "intersection",
+    "difference",
+    "smooth_union",
+    "transform",
+    "grid",
+];
+const BSDF_TYPES: &[&str] = &["diffuse"];
+const EMITTER_TYPES: &[&str] = &["rectangle", "sphere", "constant"];
+const INTEGRATOR_TYPES: &[&str] = &["direct", "path"];
+const FILTERS: &[&str] = &["tent", "gaussian", "box"];
 
 /// Reads and validates a scene file. Relative paths inside it (grids) resolve against its folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    let _ = path;
-    todo!("scene: load")
+    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, e))?;
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    parse(&text, base_dir).map_err(|e| match e {
+        // Syntax errors carry a placeholder name in `parse`; here the real file is known.
+        Error::File { path: p, message } if p == JSON_SOURCE => Error::file(path, message),
+        e => e,
+    })
 }
+
+/// Name under which [`parse`] reports JSON syntax errors (it does not know the file).
+const JSON_SOURCE: &str = "scene JSON";
 
 /// Parses and validates scene JSON; `base_dir` resolves relative file names.
 pub fn parse(json: &str, base_dir: &Path) -> Result<Scene> {
-    let _ = (json, base_dir);
-    todo!("scene: parse")
+    // serde_json's message is one line and ends with "at line L column C".
+    let root: Value = serde_json::from_str(json).map_err(|e| Error::file(JSON_SOURCE, e))?;
+    let mut cx = Context {
+        base_dir,
+        names: HashMap::new(),
+    };
+    let scene = cx.scene(&root)?;
+    Ok(scene.build())
+}
+
+/// A validated scene whose shapes are not built yet ([`Shape::new`] evaluates the SDF's bounds, which
+/// should only happen once everything is known to be valid).
+struct ParsedScene {
+    camera: Camera,
+    integrator: IntegratorKind,
+    spp: u32,
+    shapes: Vec<(String, Sdf, Bsdf)>,
+    emitters: Vec<NamedEmitter>,
+}
+
+impl ParsedScene {
+    fn build(self) -> Scene {
+        let shapes = self
+            .shapes
+            .into_iter()
+            .map(|(name, sdf, bsdf)| Shape::new(name, sdf, bsdf))
+            .collect();
+        Scene::new(
+            self.camera,
+            self.integrator,
+            self.spp,
+            shapes,
+            self.emitters,
+        )
+    }
+}
+
+/// State shared by the whole walk.
+struct Context<'a> {
+    base_dir: &'a Path,
+    /// Every name seen so far (shapes, emitters, sdf nodes: one namespace, because later parameter
+    /// names are `<name>.<field>`), with the path that defined it.
+    names: HashMap<String, String>,
+}
+
+fn join(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
+}
+
+/// A short description of a JSON value for error messages.
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Null => "null".into(),
+        Value::Bool(b) => format!("boolean {b}"),
+        Value::Number(n) => format!("number {n}"),
+        Value::String(s) => format!("string {s:?}"),
+        Value::Array(a) => format!("an array of {} elements", a.len()),
+        Value::Object(_) => "an object".into(),
+    }
+}
+
+/// A JSON object being read: its path and the keys it accepts.
+struct Obj<'a> {
+    path: String,
+    map: &'a Map<String, Value>,
+}
+
+impl<'a> Obj<'a> {
+    /// Checks that `v` is an object whose keys are all in `allowed`.
+    fn new(v: &'a Value, path: String, allowed: &[&str]) -> Result<Self> {
+        let Value::Object(map) = v else {
+            let at = if path.is_empty() {
+                "scene".into()
+            } else {
+                path
+            };
+            return Err(Error::field(
+                at,
+                format!("expected an object, got {}", describe(v)),
+            ));
+        };
+        for key in map.keys() {
+            if !allowed.contains(&key.as_str()) {
+                return Err(Error::field(
+                    join(&path, key),
+                    format!("unknown field, expected one of {}", allowed.join(", ")),
+                ));
+            }
+        }
+        Ok(Self { path, map })
+    }
+
+    /// Reads the string tag `key` of `v` (an object) and checks it against `types`; returns the tag.
+    fn tag(v: &'a Value, path: &str, key: &str, types: &[&str]) -> Result<&'a str> {
+        let Value::Object(map) = v else {
+            return Err(Error::field(
+                path,
+                format!("expected an object, got {}", describe(v)),
+            ));
+        };
+        let field = join(path, key);
+        let Some(t) = map.get(key) else {
+            return Err(Error::field(
+                field,
+                format!("missing, expected one of {}", types.join(", ")),
+            ));
+        };
+        let Value::String(t) = t else {
+            return Err(Error::field(
+                field,
+                format!("expected a string, got {}", describe(t)),
+            ));
+        };
+        if types.contains(&t.as_str()) {
+            Ok(t)
+        } else {
+            Err(Error::field(
+                field,
+                format!("unknown type {t:?}, expected one of {}", types.join(", ")),
+            ))
+        }
+    }
+
+    fn at(&self, key: &str) -> String {
+        join(&self.path, key)
+    }
+
+    fn get(&self, key: &str) -> Option<&'a Value> {
+        self.map.get(key)
+    }
+
+    fn req(&self, key: &str) -> Result<&'a Value> {
+        self.get(key)
+            .ok_or_else(|| Error::field(self.at(key), "missing"))
+    }
+
+    fn f32(&self, key: &str) -> Result<f32> {
+        number(self.req(key)?, &self.at(key))
+    }
+
+    fn opt_f32(&self, key: &str) -> Result<Option<f32>> {
+        self.get(key).map(|v| number(v, &self.at(key))).transpose()
+    }
+
+    fn vec3(&self, key: &str) -> Result<Vec3> {
+        vec3(self.req(key)?, &self.at(key))
+    }
+
+    fn opt_vec3(&self, key: &str) -> Result<Option<Vec3>> {
+        self.get(key).map(|v| vec3(v, &self.at(key))).transpose()
+    }
+
+    /// A non-zero vector, normalised.
+    fn direction(&self, key: &str) -> Result<Vec3> {
+        let v = self.vec3(key)?;
+        v.try_normalize().ok_or_else(|| {
+            Error::field(
+                self.at(key),
+                format!("must be a non-zero vector, got {}", fmt3(v)),
+            )
+        })
+    }
+
+    fn string(&self, key: &str) -> Result<&'a str> {
+        let v = self.req(key)?;
+        v.as_str().ok_or_else(|| {
+            Error::field(
+                self.at(key),
+                format!("expected a string, got {}", describe(v)),
+            )
+        })
+    }
+
+    fn opt_string(&self, key: &str) -> Result<Option<&'a str>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(_) => self.string(key).map(Some),
+        }
+    }
+
+    /// An integer in `[min, max]`.
+    fn opt_int(&self, key: &str, min: u64, max: u64) -> Result<Option<u32>> {
+        let Some(v) = self.get(key) else {
+            return Ok(None);
+        };
+        let bad = |what: String| Error::field(self.at(key), what);
+        match v {
+            Value::Number(n) => match (n.as_u64(), n.as_i64()) {
+                (Some(i), _) if (min..=max).contains(&i) => Ok(Some(i as u32)),
+                (Some(i), _) if i > max => Err(bad(format!("must be <= {max}, got {n}"))),
+                (Some(_), _) | (None, Some(_)) => Err(bad(format!("must be >= {min}, got {n}"))),
+                (None, None) => Err(bad(format!("must be an integer, got {n}"))),
+            },
+            other => Err(bad(format!("expected an integer, got {}", describe(other)))),
+        }
+    }
+
+    fn array(&self, key: &str) -> Result<&'a [Value]> {
+        let v = self.req(key)?;
+        match v {
+            Value::Array(a) => Ok(a),
+            other => Err(Error::field(
+                self.at(key),
+                format!("expected an array, got {}", describe(other)),
+            )),
+        }
+    }
+
+    fn opt_array(&self, key: &str) -> Result<&'a [Value]> {
+        match self.get(key) {
+            None => Ok(&[]),
+            Some(_) => self.array(key),
+        }
+    }
+}
+
+/// A finite JSON number that fits an `f32`.
+fn number(v: &Value, path: &str) -> Result<f32> {
+    let Value::Number(n) = v else {
+        return Err(Error::field(
+            path,
+            format!("expected a number, got {}", describe(v)),
+        ));
+    };
+    // Without serde_json's `arbitrary_precision`, every JSON number converts to f64 (1e999 is already
+    // a syntax error "number out of range"); values beyond f32's range become infinite here.
+    let x = n.as_f64().unwrap_or(f64::NAN) as f32;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::field(
+            path,
+            format!("must be a finite number within f32 range, got {n}"),
+        ))
+    }
+}
+
+fn vec3(v: &Value, path: &str) -> Result<Vec3> {
+    match v {
+        Value::Array(a) if a.len() == 3 => Ok(Vec3::new(
+            number(&a[0], &format!("{path}[0]"))?,
+            number(&a[1], &format!("{path}[1]"))?,
+            number(&a[2], &format!("{path}[2]"))?,
+        )),
+        other => Err(Error::field(
+            path,
+            format!("expected an array of 3 numbers, got {}", describe(other)),
+        )),
+    }
+}
+
+fn fmt3(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+fn positive(x: f32, path: &str) -> Result<f32> {
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::field(path, format!("must be > 0, got {x}")))
+    }
+}
+
+fn positive3(v: Vec3, path: &str) -> Result<Vec3> {
+    if v.cmpgt(Vec3::ZERO).all() {
+        Ok(v)
+    } else {
+        Err(Error::field(
+            path,
+            format!("every component must be > 0, got {}", fmt3(v)),
+        ))
+    }
+}
+
+fn in_range(x: f32, lo: f32, hi: f32, path: &str) -> Result<f32> {
+    if (lo..=hi).contains(&x) {
+        Ok(x)
+    } else {
+        Err(Error::field(
+            path,
+            format!("must be in [{lo}, {hi}], got {x}"),
+        ))
+    }
+}
+
+impl Context<'_> {
+    /// Registers a name (shape, emitter or sdf node) defined at `path`.
+    fn name(&mut self, name: &str, path: String) -> Result<()> {
+        let valid = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        if !valid {
+            return Err(Error::field(
+                path,
+                format!(
+                    "names must be non-empty and use only ASCII letters, digits, '_' and '-', got {name:?}"
+                ),
+            ));
+        }
+        if let Some(first) = self.names.get(name) {
+            return Err(Error::field(
+                path,
+                format!("duplicate name {name:?} (already used by {first})"),
+            ));
+        }
+        self.names.insert(name.to_string(), path);
+        Ok(())
+    }
+
+    fn scene(&mut self, root: &Value) -> Result<ParsedScene> {
+        let o = Obj::new(
+            root,
+            String::new(),
+            &[
+                "description",
+                "camera",
+                "integrator",
+                "spp",
+                "shapes",
+                "emitters",
+            ],
+        )?;
+        o.opt_string("description")?;
+        let camera = camera(o.req("camera")?, "camera")?;
+        let integrator = match o.get("integrator") {
+            None => IntegratorKind::Direct,
+            Some(v) => integrator(v, "integrator")?,
+        };
+        let spp = o.opt_int("spp", 1, u32::MAX as u64)?.unwrap_or(DEFAULT_SPP);
+
+        let mut shapes = Vec::new();
+        for (i, v) in o.opt_array("shapes")?.iter().enumerate() {
+            shapes.push(self.shape(v, format!("shapes[{i}]"))?);
+        }
+        let mut emitters = Vec::new();
+        let mut environment: Option<String> = None;
+        for (i, v) in o.opt_array("emitters")?.iter().enumerate() {
+            let path = format!("emitters[{i}]");
+            let e = self.emitter(v, &path)?;
+            if e.emitter.is_infinite() {
+                if let Some(first) = &environment {
+                    return Err(Error::field(
+                        join(&path, "type"),
+                        format!(
+                            "at most one environment emitter is allowed, {first} is one already"
+                        ),
+                    ));
+                }
+                environment = Some(path);
+            }
+            emitters.push(e);
+        }
+        Ok(ParsedScene {
+            camera,
+            integrator,
+            spp,
+            shapes,
+            emitters,
+        })
+    }
+
+    fn shape(&mut self, v: &Value, path: String) -> Result<(String, Sdf, Bsdf)> {
+        let o = Obj::new(v, path, &["name", "sdf", "bsdf"])?;
+        let name = o.string("name")?;
+        self.name(name, o.at("name"))?;
+        let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?;
+        let bsdf = bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
+        Ok((name.to_string(), sdf, bsdf))
+    }
+
+    fn sdf(&mut self, v: &Value, path: &str) -> Result<Sdf> {
+        let ty = Obj::tag(v, path, "type", SDF_TYPES)?;
+        // Every node accepts "type" and "name" besides its own fields.
+        let fields: &[&str] = match ty {
+            "sphere" => &["center", "radius"],
+            "box" => &["center", "half_size", "rounding"],
+            "torus" => &["center", "axis", "major_radius", "minor_radius"],
+            "cylinder" => &["center", "axis", "radius", "half_height", "rounding"],
+            "capsule" => &["a", "b", "radius"],
+            "plane" => &["normal", "offset"],
+            "union" | "intersection" | "difference" => &["children"],
+            "smooth_union" => &["children", "k"],
+            "transform" => &["translate", "rotate", "scale", "child"],
+            "grid" => &["file", "bbox_min", "bbox_max"],
+            _ => unreachable!("tag checked against SDF_TYPES"),
+        };
+        let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
+        let o = Obj::new(v, path.to_string(), &allowed)?;
+        if let Some(name) = o.opt_string("name")? {
+            // Node names are only checked for now; a later parameter registry will key on them.
+            self.name(name, o.at("name"))?;
+        }
+        let p3 = |x: Vec3| Param3::from(x);
+        Ok(match ty {
+            "sphere" => Sdf::Sphere {
+                center: p3(o.vec3("center")?),
+                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+            },
+            "box" => {
+                let half = positive3(o.vec3("half_size")?, &o.at("half_size"))?;
+                let rounding = o.opt_f32("rounding")?.unwrap_or(0.0);
+                let rounding = in_range(rounding, 0.0, half.min_element(), &o.at("rounding"))?;
+                Sdf::Box {
+                    center: p3(o.vec3("center")?),
+                    half_size: p3(half),
+                    rounding: rounding.into(),
+                }
+            }
+            "torus" => {
+                let minor = positive(o.f32("minor_radius")?, &o.at("minor_radius"))?;
+                let major = o.f32("major_radius")?;
+                if major <= minor {
+                    return Err(Error::field(
+                        o.at("major_radius"),
+                        format!("must be > minor_radius ({minor}), got {major}"),
+                    ));
+                }
+                Sdf::Torus {
+                    center: p3(o.vec3("center")?),
+                    axis: o.direction("axis")?,
+                    major_radius: major.into(),
+                    minor_radius: minor.into(),
+                }
+            }
+            "cylinder" => {
+                let radius = positive(o.f32("radius")?, &o.at("radius"))?;
+                let half_height = positive(o.f32("half_height")?, &o.at("half_height"))?;
+                let rounding = o.opt_f32("rounding")?.unwrap_or(0.0);
+                let rounding = in_range(rounding, 0.0, radius.min(half_height), &o.at("rounding"))?;
+                Sdf::Cylinder {
+                    center: p3(o.vec3("center")?),
+                    axis: o.direction("axis")?,
+                    radius: radius.into(),
+                    half_height: half_height.into(),
+                    rounding: rounding.into(),
+                }
+            }
+            "capsule" => Sdf::Capsule {
+                a: p3(o.vec3("a")?),
+                b: p3(o.vec3("b")?),
+                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+            },
+            "plane" => Sdf::Plane {
+                normal: o.direction("normal")?,
+                offset: o.f32("offset")?.into(),
+            },
+            "union" => Sdf::Union(self.children(&o)?),
+            "intersection" => Sdf::Intersection(self.children(&o)?),
+            "difference" => Sdf::Difference(self.children(&o)?),
+            "smooth_union" => {
+                let k = positive(o.f32("k")?, &o.at("k"))?;
+                Sdf::SmoothUnion {
+                    children: self.children(&o)?,
+                    k: k.into(),
+                }
+            }
+            "transform" => self.transform(&o)?,
+            "grid" => self.grid(&o)?,
+            _ => unreachable!("tag checked against SDF_TYPES"),
+        })
+    }
+
+    fn children(&mut self, o: &Obj) -> Result<Vec<Sdf>> {
+        let list = o.array("children")?;
+        if list.is_empty() {
+            return Err(Error::field(
+                o.at("children"),
+                "must hold at least one node, got an empty array",
+            ));
+        }
+        list.iter()
+            .enumerate()
+            .map(|(i, c)| self.sdf(c, &format!("{}[{i}]", o.at("children"))))
+            .collect()
+    }
+
+    fn transform(&mut self, o: &Obj) -> Result<Sdf> {
+        let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
+        let scale = positive(o.opt_f32("scale")?.unwrap_or(1.0), &o.at("scale"))?;
+        let (axis, angle) = match o.get("rotate") {
+            None => (Vec3::Y, 0.0),
+            Some(r) => {
+                let r = Obj::new(r, o.at("rotate"), &["axis", "angle"])?;
+                (r.direction("axis")?, r.f32("angle")?)
+            }
+        };
+        let child = self.sdf(o.req("child")?, &o.at("child"))?;
+        Ok(Sdf::Transform {
+            translate: translate.into(),
+            axis,
+            angle: Param::new(angle),
+            scale: scale.into(),
+            child: Box::new(child),
+        })
+    }
+
+    fn grid(&mut self, o: &Obj) -> Result<Sdf> {
+        let bbox_min = o.vec3("bbox_min")?;
+        let bbox_max = o.vec3("bbox_max")?;
+        if !bbox_max.cmpgt(bbox_min).all() {
+            return Err(Error::field(
+                o.at("bbox_max"),
+                format!(
+                    "must exceed bbox_min {} in every component, got {}",
+                    fmt3(bbox_min),
+                    fmt3(bbox_max)
+                ),
+            ));
+        }
+        let field = o.at("file");
+        let file = self.base_dir.join(o.string("file")?);
+        if !file.is_file() {
+            return Err(Error::field(
+                field,
+                format!("grid file {} not found", file.display()),
+            ));
+        }
+        let data = read_npy(&file).map_err(|e| {
+            // The reader's own message names the file already when it is a file error.
+            let message = match e {
+                Error::File { message, .. } => message,
+                e => e.to_string(),
+            };
+            Error::field(
+                field.clone(),
+                format!("grid file {}: {message}", file.display()),
+            )
+        })?;
+        check_grid(&data).map_err(|message| {
+            Error::field(
+                field.clone(),
+                format!("grid file {}: {message}", file.display()),
+            )
+        })?;
+        Ok(Sdf::Grid {
+            data: Arc::new(data),
+            bbox_min,
+            bbox_max,
+        })
+    }
+
+    fn emitter(&mut self, v: &Value, path: &str) -> Result<NamedEmitter> {
+        let ty = Obj::tag(v, path, "type", EMITTER_TYPES)?;
+        let fields: &[&str] = match ty {
+            "rectangle" => &["center", "normal", "u", "size", "radiance"],
+            "sphere" => &["center", "radius", "radiance"],
+            "constant" => &["radiance"],
+            _ => unreachable!("tag checked against EMITTER_TYPES"),
+        };
+        let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
+        let o = Obj::new(v, path.to_string(), &allowed)?;
+        let name = o.string("name")?;
+        self.name(name, o.at("name"))?;
+        let radiance = o.vec3("radiance")?;
+        if !radiance.cmpge(Vec3::ZERO).all() {
+            return Err(Error::field(
+                o.at("radiance"),
+                format!("every component must be >= 0, got {}", fmt3(radiance)),
+            ));
+        }
+        let radiance = Param3::from(radiance);
+        let emitter = match ty {
+            "rectangle" => {
+                let normal = o.direction("normal")?;
+                let u = o.direction("u")?;
+                // Gram–Schmidt: keep the rectangle in the plane given by `normal`, with its first edge
+                // as close to `u` as possible. A `u` within ~0.06° of the normal has no such direction.
+                let u_perp = u - normal * normal.dot(u);
+                let Some(u) = u_perp.try_normalize().filter(|_| u_perp.length() > 1e-3) else {
+                    return Err(Error::field(
+                        o.at("u"),
+                        format!(
+                            "must not be parallel to normal {}, got {}",
+                            fmt3(normal),
+                            fmt3(u)
+                        ),
+                    ));
+                };
+                let size = o.req("size")?;
+                let size_path = o.at("size");
+                let size = match size {
+                    Value::Array(a) if a.len() == 2 => [
+                        positive(
+                            number(&a[0], &format!("{size_path}[0]"))?,
+                            &format!("{size_path}[0]"),
+                        )?,
+                        positive(
+                            number(&a[1], &format!("{size_path}[1]"))?,
+                            &format!("{size_path}[1]"),
+                        )?,
+                    ],
+                    other => {
+                        return Err(Error::field(
+                            size_path,
+                            format!("expected an array of 2 numbers, got {}", describe(other)),
+                        ));
+                    }
+                };
+                Emitter::Rectangle {
+                    center: o.vec3("center")?.into(),
+                    normal,
+                    u,
+                    size: [size[0].into(), size[1].into()],
+                    radiance,
+                }
+            }
+            "sphere" => Emitter::Sphere {
+                center: o.vec3("center")?.into(),
+                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+                radiance,
+            },
+            "constant" => Emitter::Constant { radiance },
+            _ => unreachable!("tag checked against EMITTER_TYPES"),
+        };
+        Ok(NamedEmitter {
+            name: name.to_string(),
+            emitter,
+        })
+    }
+}
+
+fn camera(v: &Value, path: &str) -> Result<Camera> {
+    let o = Obj::new(
+        v,
+        path.to_string(),
+        &[
+            "origin", "target", "up", "fov_y", "width", "height", "filter",
+        ],
+    )?;
+    let origin = o.vec3("origin")?;
+    let target = o.vec3("target")?;
+    let up = o.direction("up")?;
+    let view = (target - origin).try_normalize().ok_or_else(|| {
+        Error::field(
+            o.at("target"),
+            format!("must differ from origin, got {}", fmt3(target)),
+        )
+    })?;
+    if view.cross(up).length() < 1e-4 {
+        return Err(Error::field(
+            o.at("up"),
+            format!(
+                "must not be parallel to the view direction {}, got {}",
+                fmt3(view),
+                fmt3(up)
+            ),
+        ));
+    }
+    let fov_y = o.f32("fov_y")?;
+    if !(fov_y > 0.0 && fov_y < 180.0) {
+        return Err(Error::field(
+            o.at("fov_y"),
+            format!("must be in (0, 180) degrees, got {fov_y}"),
+        ));
+    }
+    let side = |key: &str| -> Result<u32> {
+        o.opt_int(key, 1, MAX_IMAGE_SIDE)?
+            .ok_or_else(|| Error::field(o.at(key), "missing"))
+    };
+    let width = side("width")?;
+    let height = side("height")?;
+    let filter = match o.opt_string("filter")? {
+        None => Filter::default(),
+        Some("tent") => Filter::Tent,
+        Some("gaussian") => Filter::Gaussian,
+        Some("box") => Filter::Box,
+        Some(other) => {
+            return Err(Error::field(
+                o.at("filter"),
+                format!(
+                    "unknown filter {other:?}, expected one of {}",
+                    FILTERS.join(", ")
+                ),
+            ));
+        }
+    };
+    Ok(Camera {
+        origin: origin.into(),
+        target: target.into(),
+        up: up.into(),
+        fov_y: fov_y.into(),
+        width,
+        height,
+        filter,
+    })
+}
+
+fn integrator(v: &Value, path: &str) -> Result<IntegratorKind> {
+    let ty = Obj::tag(v, path, "type", INTEGRATOR_TYPES)?;
+    Ok(match ty {
+        "direct" => {
+            Obj::new(v, path.to_string(), &["type"])?;
+            IntegratorKind::Direct
+        }
+        "path" => {
+            let o = Obj::new(v, path.to_string(), &["type", "max_depth"])?;
+            let max_depth = o
+                .opt_int("max_depth", 1, 1024)?
+                .unwrap_or(DEFAULT_MAX_DEPTH);
+            IntegratorKind::Path { max_depth }
+        }
+        _ => unreachable!("tag checked against INTEGRATOR_TYPES"),
+    })
+}
+
+fn bsdf(v: &Value, path: &str) -> Result<Bsdf> {
+    let ty = Obj::tag(v, path, "type", BSDF_TYPES)?;
+    Ok(match ty {
+        "diffuse" => {
+            let o = Obj::new(v, path.to_string(), &["type", "albedo"])?;
+            let albedo = o.vec3("albedo")?;
+            if !(albedo.cmpge(Vec3::ZERO).all() && albedo.cmple(Vec3::ONE).all()) {
+                return Err(Error::field(
+                    o.at("albedo"),
+                    format!("every component must be in [0, 1], got {}", fmt3(albedo)),
+                ));
+            }
+            Bsdf::Diffuse {
+                albedo: albedo.into(),
+            }
+        }
+        _ => unreachable!("tag checked against BSDF_TYPES"),
+    })
+}
+
+/// What a grid must satisfy beyond being a float32 3-D array: enough samples for a cubic B-spline and
+/// finite values.
+fn check_grid(data: &GridData) -> std::result::Result<(), String> {
+    let [nx, ny, nz] = data.dims;
+    if data.dims.iter().any(|&n| n < 4) {
+        return Err(format!(
+            "needs at least 4 samples along each axis, got shape [{nz}, {ny}, {nx}] (z, y, x)"
+        ));
+    }
+    if data.values.len() != nx * ny * nz {
+        return Err(format!(
+            "holds {} values, expected {} for shape [{nz}, {ny}, {nx}]",
+            data.values.len(),
+            nx * ny * nz
+        ));
+    }
+    if let Some(i) = data.values.iter().position(|v| !v.is_finite()) {
+        return Err(format!("value {i} is not finite ({})", data.values[i]));
+    }
+    Ok(())
+}
+
+/// Reads a grid `.npy`. Temporary stand-in until `crate::sdf::read_npy` is merged (the sdf helper owns
+/// the format); it reports an error instead of panicking.
+fn read_npy(path: &Path) -> Result<GridData> {
+    Err(Error::file(
+        path,
+        "reading .npy grids is not available yet (crate::sdf::read_npy not merged)",
+    ))
 }

@@ -3,8 +3,8 @@
 //! # What counts as a hit
 //!
 //! A hit is a **sign change** of `φ` along the ray, located to within a tolerance. The tracer marches the
-//! function `g(t) = s·φ(o + t d)`, with `s = ±1` chosen so that `g(t0) ≥ 0` (`s = +1` if the ray starts
-//! outside or exactly on the surface, `s = −1` if it starts inside: then the first crossing is the *exit*).
+//! function `g(t) = s·φ(o + t d)`, with `s = ±1` chosen so that `g(t0) ≥ 0` (`s = −1` if the ray starts
+//! inside: then the first crossing is the *exit*; on the surface, see below).
 //! Each step is `g/L` (Hart 1996), `L` the Lipschitz bound of `φ`, which cannot cross the surface. Where
 //! that step falls below the resolution `h = settings.eps`, the tracer *creeps* instead: steps of `h`,
 //! doubling on each consecutive creep step up to `64 h`, until `g` changes sign (an overshoot into the
