@@ -161,7 +161,7 @@ impl Scene {
             }
         }
         for (i, shape) in self.shapes.iter().enumerate() {
-            let Some((t0, t1)) = shape.bounds.clip(ray, 0.0, best_t) else {
+            let Some((t0, t1)) = self.trace_interval(shape, ray, best_t) else {
                 continue;
             };
             match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
