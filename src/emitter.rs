@@ -1,7 +1,7 @@
 //! Light sources: a one-sided rectangle, a sphere and a constant environment.
 
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
-use crate::math::{Frame, Ray, Vec3};
+use crate::math::{Aabb, Frame, Ray, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
 use std::f32::consts::PI;
 
@@ -309,6 +309,27 @@ impl Emitter {
         }
     }
 
+    /// Box around a finite emitter; `None` for the environment.
+    pub fn bounds(&self) -> Option<Aabb> {
+        match self {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u,
+                size,
+                ..
+            } => {
+                let v = normal.cross(*u);
+                let half = (u.abs() * size[0].value + v.abs() * size[1].value) * 0.5;
+                Some(Aabb::around(center.value(), half))
+            }
+            Emitter::Sphere { center, radius, .. } => Some(Aabb::around(
+                center.value(),
+                glam::Vec3::splat(radius.value),
+            )),
+            Emitter::Constant { .. } => None,
+        }
+    }
     /// True for emitters at infinity.
     pub fn is_infinite(&self) -> bool {
         matches!(self, Emitter::Constant { .. })

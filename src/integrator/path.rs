@@ -99,11 +99,8 @@ pub fn occluded(
             return true;
         }
     }
-    // Bounds may be tight (a box's faces lie on them): a ray entering exactly on the surface would start
-    // its trace at φ = 0, where the tracer cannot tell entering from leaving. The margin starts it outside.
-    let margin = 4.0 * scene.trace.eps;
     for shape in &scene.shapes {
-        let Some((t0, t1)) = shape.bounds.expanded(margin).clip(ray, 0.0, t_max) else {
+        let Some((t0, t1)) = scene.trace_interval(shape, ray, t_max) else {
             continue;
         };
         match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &scene.trace) {
@@ -113,18 +110,6 @@ pub fn occluded(
         }
     }
     false
-}
-
-/// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: [`Scene::offset_origin`], but
-/// never closer than about 32 ulps of `p`'s largest coordinate, so that a tolerance set too small for the
-/// coordinates (a scene whose finite extent is tiny next to its unbounded shapes) cannot make a ray start
-/// inside the surface noise and hit its own origin.
-#[inline]
-pub fn spawn_origin(scene: &Scene, p: glam::Vec3, n: glam::Vec3, w: glam::Vec3) -> glam::Vec3 {
-    let floor = p.abs().max_element() * (32.0 * f32::EPSILON);
-    let offset = (4.0 * scene.trace.eps).max(floor);
-    let side = if n.dot(w) >= 0.0 { offset } else { -offset };
-    p + n * side
 }
 
 /// What a ray sees, when only emission along it matters (the last segment of a path).
@@ -218,7 +203,7 @@ pub fn sample_light(
     }
     let select = 1.0 / count as f32;
     let pdf_w = select * es.pdf;
-    let o = spawn_origin(scene, p, n, es.wi);
+    let o = scene.offset_origin(p, n, es.wi);
     let infinite = emitter.is_infinite();
     let (t_max, pdf) = if infinite {
         (f32::INFINITY, pdf_w)
@@ -352,7 +337,7 @@ pub fn trace_path(
                 };
                 bsdf_pdf = Some(bs.pdf);
                 prev = h.p;
-                ray = Ray::new(spawn_origin(scene, h.p, h.n, bs.wi), bs.wi);
+                ray = Ray::new(scene.offset_origin(h.p, h.n, bs.wi), bs.wi);
             }
         }
     }

@@ -126,6 +126,11 @@ impl Scene {
                 extent = extent.union(&s.bounds);
             }
         }
+        for e in &emitters {
+            if let Some(b) = e.emitter.bounds() {
+                extent = extent.union(&b);
+            }
+        }
         let finite_emitters: Vec<usize> = (0..emitters.len())
             .filter(|&i| !emitters[i].emitter.is_infinite())
             .collect();
