@@ -313,7 +313,7 @@ mod tests {
         let x = Dual4::lift(3.0, Some(0));
         let y = Dual4::lift(-2.0, Some(1));
         let p = x * y + x * 4.0;
-        assert_eq!(p.re, -2.0);
+        assert_eq!(p.re, 6.0);
         assert_eq!(p.eps, [2.0, 3.0, 0.0, 0.0]);
     }
 }
