@@ -135,7 +135,11 @@ fn points() -> Vec<glam::Vec3> {
             let z = 1.0 - 2.0 * (i as f32 + 0.5) / 1024.0;
             let rho = (1.0 - z * z).sqrt();
             let r = 1.0 + 0.05 * (t * 7.0).sin();
-            glam::Vec3::new(rho * (t * 6.283).cos(), z, rho * (t * 6.283).sin()) * r
+            glam::Vec3::new(
+                rho * (t * std::f32::consts::TAU).cos(),
+                z,
+                rho * (t * std::f32::consts::TAU).sin(),
+            ) * r
         })
         .collect()
 }
