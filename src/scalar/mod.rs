@@ -9,8 +9,11 @@
 //! value loses the derivative of the branch condition; where that matters a boundary term recovers it.
 
 mod dual;
+mod dual_array;
+pub mod rules;
 
 pub use dual::{Dual2Vec3, DualVec3};
+pub use dual_array::{Dual4, Dual8, DualN};
 pub use num_dual::Dual32;
 
 use std::fmt::Debug;
