@@ -8,6 +8,7 @@
 pub mod path;
 pub mod shading;
 
+use crate::camera::CameraFrame;
 use crate::film::Image;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
@@ -81,8 +82,11 @@ pub struct RenderStats {
 pub const CAMERA_STREAM: u64 = 0;
 
 /// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
+/// `frame` is `scene.camera.frame::<f32>()`, built once per render.
+#[allow(clippy::too_many_arguments)]
 pub fn sample_pixel(
     scene: &Scene,
+    frame: &CameraFrame<f32>,
     seed: u64,
     x: u32,
     y: u32,
@@ -95,7 +99,7 @@ pub fn sample_pixel(
     let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
     let offset = camera.filter.sample(sampler.next_2d());
-    let ray = camera.generate_ray(centre + offset);
+    let ray = frame.generate_ray(centre + offset);
     trace_path(
         scene,
         ray,
@@ -126,6 +130,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
         bar
     });
     let spp = options.spp.max(1);
+    let frame = scene.camera.frame::<f32>();
     let row_len = 3 * width as usize;
     if row_len > 0 {
         image
@@ -141,7 +146,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
                     let mut sum = glam::Vec3::ZERO;
                     for s in 0..spp {
                         let l =
-                            sample_pixel(scene, options.seed, x, y, s, &mut record, &mut counters);
+                            sample_pixel(scene, &frame, options.seed, x, y, s, &mut record, &mut counters);
                         if l.is_finite() {
                             sum += l;
                         } else {

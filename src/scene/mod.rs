@@ -107,6 +107,9 @@ pub struct Scene {
     pub environment: Option<usize>,
 }
 
+/// Scenes with at most this many shapes have them traced nearest-bounds-first (sorted on the stack).
+const MAX_SORTED_SHAPES: usize = 16;
+
 /// Relative hit tolerance: `eps = RELATIVE_EPS · scene scale`.
 pub const RELATIVE_EPS: f32 = 1e-5;
 
@@ -165,17 +168,30 @@ impl Scene {
                 best_n = n;
             }
         }
+        // Trace shapes in the order the ray enters their bounds, so a near hit cuts the intervals of
+        // the shapes behind it (most of a floor's pixels never march through the object above it).
+        let mut intervals = [(0.0f32, 0.0f32, 0usize); MAX_SORTED_SHAPES];
+        let mut count = 0;
+        let sorted = self.shapes.len() <= MAX_SORTED_SHAPES;
         for (i, shape) in self.shapes.iter().enumerate() {
             let Some((t0, t1)) = self.trace_interval(shape, ray, best_t) else {
                 continue;
             };
-            match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
-                ShapeTrace::Hit(t) if t < best_t => {
-                    best_t = t;
-                    best = Some(Surface::Shape(i));
+            if sorted {
+                let mut k = count;
+                while k > 0 && intervals[k - 1].0 > t0 {
+                    intervals[k] = intervals[k - 1];
+                    k -= 1;
                 }
-                ShapeTrace::Exhausted(_) => exhausted = true,
-                _ => {}
+                intervals[k] = (t0, t1, i);
+                count += 1;
+            } else {
+                self.trace_shape(i, ray, t0, t1, &mut best_t, &mut best, &mut exhausted);
+            }
+        }
+        for &(t0, t1, i) in &intervals[..count] {
+            if t0 < best_t {
+                self.trace_shape(i, ray, t0, t1.min(best_t), &mut best_t, &mut best, &mut exhausted);
             }
         }
         match best {
@@ -197,6 +213,29 @@ impl Scene {
         }
     }
 
+    /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
+    #[inline]
+    fn trace_shape(
+        &self,
+        i: usize,
+        ray: &Ray,
+        t0: f32,
+        t1: f32,
+        best_t: &mut f32,
+        best: &mut Option<Surface>,
+        exhausted: &mut bool,
+    ) {
+        let shape = &self.shapes[i];
+        match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
+            ShapeTrace::Hit(t) if t < *best_t => {
+                *best_t = t;
+                *best = Some(Surface::Shape(i));
+            }
+            ShapeTrace::Exhausted(_) => *exhausted = true,
+            _ => {}
+        }
+    }
+
     /// The interval of `ray` in `(0, t_max)` where `shape` must be traced: its bounds grown by a margin.
     ///
     /// Bounds may be tight (a box's faces lie on them): a ray entering exactly on the surface would start
@@ -206,7 +245,7 @@ impl Scene {
     pub fn trace_interval(&self, shape: &Shape, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
         shape
             .bounds
-            .expanded(4.0 * self.trace.eps)
+            .expanded(self.trace.eps)
             .clip(ray, 0.0, t_max)
     }
 
