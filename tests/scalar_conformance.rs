@@ -200,12 +200,8 @@ fn reference_derivatives(x: f32) -> Vec<f64> {
         .collect()
 }
 
-/// Index of `S::constant(-0.4).atan2(x)` in [`exprs`].
-const ATAN2_CONST_Y: usize = 10;
-
 /// Checks one type: primal agreement with `f32` (`exact` for bitwise) and derivatives in every direction.
-/// `known` lists `(expression, input)` pairs whose derivative is a documented defect of the type.
-fn check_type<S: Directions>(exact: bool, known: &[(usize, f32)]) {
+fn check_type<S: Directions>(exact: bool) {
     for &x in &SPICY {
         let reference = exprs(x);
         let fd = reference_derivatives(x);
@@ -221,9 +217,6 @@ fn check_type<S: Directions>(exact: bool, known: &[(usize, f32)]) {
                         close(p as f64, r as f64, 1e-4),
                         "expr {i} at x = {x}: {p} vs {r}"
                     );
-                }
-                if known.contains(&(i, x)) {
-                    continue;
                 }
                 for j in 0..S::DIRS {
                     let d = v.d(j) as f64;
@@ -243,10 +236,7 @@ fn check_type<S: Directions>(exact: bool, known: &[(usize, f32)]) {
         }
         // Unseeded lifts are constants.
         let c = exprs(S::lift(x, None));
-        for (i, v) in c.into_iter().enumerate() {
-            if known.contains(&(i, x)) {
-                continue;
-            }
+        for v in c {
             for j in 0..S::DIRS {
                 assert_eq!(v.d(j), 0.0);
             }
@@ -256,12 +246,9 @@ fn check_type<S: Directions>(exact: bool, known: &[(usize, f32)]) {
 
 macro_rules! scalar_suite {
     ($name:ident, $t:ty, exact = $exact:expr) => {
-        scalar_suite!($name, $t, exact = $exact, known = &[]);
-    };
-    ($name:ident, $t:ty, exact = $exact:expr, known = $known:expr) => {
         #[test]
         fn $name() {
-            check_type::<$t>($exact, $known);
+            check_type::<$t>($exact);
         }
     };
 }
@@ -270,15 +257,7 @@ scalar_suite!(f32_conforms, f32, exact = true);
 scalar_suite!(f64_reference_conforms, F64, exact = false);
 scalar_suite!(dualvec3_conforms, DualVec3, exact = false);
 scalar_suite!(dual2vec3_conforms, Dual2Vec3, exact = false);
-// num-dual 0.15 computes `atan2(y, x)` as `atan(y / x)` with the primal patched, so its derivative is NaN
-// where `x == 0` exactly (see `dual32_atan2_at_zero_x_is_nan`). DualN uses `rules::atan2` and has no such
-// hole.
-scalar_suite!(
-    dual32_conforms,
-    Dual32,
-    exact = false,
-    known = &[(ATAN2_CONST_Y, 0.0)]
-);
+scalar_suite!(dual32_conforms, Dual32, exact = false);
 scalar_suite!(dual_n1_conforms, DualN<1>, exact = true);
 scalar_suite!(dual_n3_conforms, DualN<3>, exact = true);
 scalar_suite!(dual_n8_conforms, DualN<8>, exact = true);
@@ -343,17 +322,34 @@ fn dual_n8_slots_match_dual32_seeded_per_input() {
     }
 }
 
-/// Records the num-dual defect skipped in `dual32_conforms`; when this fails, num-dual (or the `Scalar`
-/// impl for `Dual32`) has been fixed and the `known` entry can go.
+/// num-dual 0.15 computes `atan2(y, x)` as `atan(y / x)`, whose derivative is NaN at `x = 0`; the
+/// `Scalar` impl for the num-dual types avoids that quotient. ∂atan2(y, x)/∂x = −y / (x² + y²) = 2.5 here.
 #[test]
-fn dual32_atan2_at_zero_x_is_nan() {
+fn atan2_at_zero_x_has_finite_derivatives() {
     let v = Dual32::constant(-0.4).atan2(Dual32::lift(0.0, Some(0)));
-    assert!(v.eps.is_nan());
-    // Even with no derivative at all: 0/0 in the quotient.
+    assert!(close(v.eps as f64, 2.5, 1e-6), "{v:?}");
     let c = Dual32::constant(-0.4).atan2(Dual32::constant(0.0));
-    assert!(c.eps.is_nan());
+    assert_eq!(c.eps, 0.0);
     let w = DualN::<1>::constant(-0.4).atan2(DualN::<1>::lift(0.0, Some(0)));
     assert!(close(w.eps[0] as f64, 2.5, 1e-6));
+    // Every quadrant and both axes agree with the rule table.
+    for (y, x) in [
+        (0.3f32, 0.7f32),
+        (0.7, -0.3),
+        (-0.2, -0.9),
+        (-0.8, 0.1),
+        (0.5, 0.0),
+        (0.0, -0.5),
+    ] {
+        let (value, dy, dx) = implicit_psdr::scalar::rules::atan2(y, x);
+        let a = Dual32::lift(y, Some(0)).atan2(Dual32::constant(x));
+        let b = Dual32::constant(y).atan2(Dual32::lift(x, Some(0)));
+        assert!(close(a.re as f64, value as f64, 1e-6) && close(a.eps as f64, dy as f64, 1e-5));
+        assert!(
+            close(b.eps as f64, dx as f64, 1e-5),
+            "({y}, {x}): {b:?} vs {dx}"
+        );
+    }
 }
 
 #[test]

@@ -145,8 +145,16 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
                 for x in 0..width {
                     let mut sum = glam::Vec3::ZERO;
                     for s in 0..spp {
-                        let l =
-                            sample_pixel(scene, &frame, options.seed, x, y, s, &mut record, &mut counters);
+                        let l = sample_pixel(
+                            scene,
+                            &frame,
+                            options.seed,
+                            x,
+                            y,
+                            s,
+                            &mut record,
+                            &mut counters,
+                        );
                         if l.is_finite() {
                             sum += l;
                         } else {

@@ -49,7 +49,25 @@ macro_rules! impl_scalar_for_num_dual {
             }
             #[inline]
             fn atan2(self, x: Self) -> Self {
-                DualNum::atan2(&self, x)
+                // num-dual computes atan(y / x), whose derivatives are NaN at x = 0. Divide by the larger
+                // of |x|, |y| instead: each branch is analytic where it is used, so derivatives of every
+                // order stay exact; at the origin the result is a constant.
+                let (y, xr, yr) = (self, x.re, self.re);
+                if xr == 0.0 && yr == 0.0 {
+                    Self::constant(yr.atan2(xr))
+                } else if xr.abs() >= yr.abs() {
+                    let base = DualNum::atan(&(y / x));
+                    if xr > 0.0 {
+                        base
+                    } else if yr >= 0.0 {
+                        base + std::f32::consts::PI
+                    } else {
+                        base - std::f32::consts::PI
+                    }
+                } else {
+                    let half_pi = std::f32::consts::FRAC_PI_2.copysign(yr);
+                    -DualNum::atan(&(x / y)) + half_pi
+                }
             }
             #[inline]
             fn acos(self) -> Self {

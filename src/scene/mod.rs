@@ -107,6 +107,15 @@ pub struct Scene {
     pub environment: Option<usize>,
 }
 
+/// The nearest surface found so far by [`Scene::intersect`].
+struct Nearest {
+    t: f32,
+    surface: Option<Surface>,
+    /// Normal of an emitter hit (shape normals are computed once, for the final hit only).
+    normal: glam::Vec3,
+    exhausted: bool,
+}
+
 /// Scenes with at most this many shapes have them traced nearest-bounds-first (sorted on the stack).
 const MAX_SORTED_SHAPES: usize = 16;
 
@@ -157,15 +166,20 @@ impl Scene {
 
     /// The first surface hit by `ray` in `(0, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Intersection {
-        let mut best_t = t_max;
-        let mut best: Option<Surface> = None;
-        let mut best_n = glam::Vec3::ZERO;
-        let mut exhausted = false;
+        let mut nearest = Nearest {
+            t: t_max,
+            surface: None,
+            normal: glam::Vec3::ZERO,
+            exhausted: false,
+        };
         for &i in &self.finite_emitters {
-            if let Some((t, n)) = self.emitters[i].emitter.intersect(ray, best_t) {
-                best_t = t;
-                best = Some(Surface::Emitter(i));
-                best_n = n;
+            if let Some((t, n)) = self.emitters[i].emitter.intersect(ray, nearest.t) {
+                nearest = Nearest {
+                    t,
+                    surface: Some(Surface::Emitter(i)),
+                    normal: n,
+                    ..nearest
+                };
             }
         }
         // Trace shapes in the order the ray enters their bounds, so a near hit cuts the intervals of
@@ -174,7 +188,7 @@ impl Scene {
         let mut count = 0;
         let sorted = self.shapes.len() <= MAX_SORTED_SHAPES;
         for (i, shape) in self.shapes.iter().enumerate() {
-            let Some((t0, t1)) = self.trace_interval(shape, ray, best_t) else {
+            let Some((t0, t1)) = self.trace_interval(shape, ray, nearest.t) else {
                 continue;
             };
             if sorted {
@@ -186,52 +200,43 @@ impl Scene {
                 intervals[k] = (t0, t1, i);
                 count += 1;
             } else {
-                self.trace_shape(i, ray, t0, t1, &mut best_t, &mut best, &mut exhausted);
+                self.trace_shape(i, ray, t0, t1, &mut nearest);
             }
         }
         for &(t0, t1, i) in &intervals[..count] {
-            if t0 < best_t {
-                self.trace_shape(i, ray, t0, t1.min(best_t), &mut best_t, &mut best, &mut exhausted);
+            if t0 < nearest.t {
+                self.trace_shape(i, ray, t0, t1.min(nearest.t), &mut nearest);
             }
         }
-        match best {
+        match nearest.surface {
             Some(surface) => {
-                let p = ray.at(best_t);
+                let p = ray.at(nearest.t);
                 let n = match surface {
                     Surface::Shape(i) => self.shapes[i].sdf.normal(p),
-                    Surface::Emitter(_) => best_n,
+                    Surface::Emitter(_) => nearest.normal,
                 };
                 Intersection::Hit(Hit {
-                    t: best_t,
+                    t: nearest.t,
                     p,
                     n,
                     surface,
                 })
             }
-            None if exhausted => Intersection::Exhausted,
+            None if nearest.exhausted => Intersection::Exhausted,
             None => Intersection::Miss,
         }
     }
 
     /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
     #[inline]
-    fn trace_shape(
-        &self,
-        i: usize,
-        ray: &Ray,
-        t0: f32,
-        t1: f32,
-        best_t: &mut f32,
-        best: &mut Option<Surface>,
-        exhausted: &mut bool,
-    ) {
+    fn trace_shape(&self, i: usize, ray: &Ray, t0: f32, t1: f32, nearest: &mut Nearest) {
         let shape = &self.shapes[i];
         match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
-            ShapeTrace::Hit(t) if t < *best_t => {
-                *best_t = t;
-                *best = Some(Surface::Shape(i));
+            ShapeTrace::Hit(t) if t < nearest.t => {
+                nearest.t = t;
+                nearest.surface = Some(Surface::Shape(i));
             }
-            ShapeTrace::Exhausted(_) => *exhausted = true,
+            ShapeTrace::Exhausted(_) => nearest.exhausted = true,
             _ => {}
         }
     }
@@ -243,10 +248,7 @@ impl Scene {
     /// outside.
     #[inline]
     pub fn trace_interval(&self, shape: &Shape, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
-        shape
-            .bounds
-            .expanded(self.trace.eps)
-            .clip(ray, 0.0, t_max)
+        shape.bounds.expanded(self.trace.eps).clip(ray, 0.0, t_max)
     }
 
     /// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: `p` moved off the surface by
