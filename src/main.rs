@@ -209,16 +209,16 @@ fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
             names.join(", ")
         );
     };
-    if !shape.bounds.is_finite() || shape.bounds.is_empty() {
+    // The grid samples the SDF in the shape's own coordinates (before its rigid translation).
+    let local = shape.sdf.bounds();
+    if !local.is_finite() || local.is_empty() {
         bail!(
             "--shape: shape {name:?} is unbounded (e.g. a plane), it cannot be baked into a grid"
         );
     }
     // Padding keeps a few cells between the surface and the box, where the B-spline reconstruction
     // is accurate; sdf::bake puts `res` samples along the longest edge and near-cubic cells elsewhere.
-    let padded = shape
-        .bounds
-        .expanded(BAKE_PADDING * shape.bounds.extent().max_element());
+    let padded = local.expanded(BAKE_PADDING * local.extent().max_element());
     let (bbox_min, bbox_max) = (padded.min, padded.max);
     let grid = sdf::bake(&shape.sdf, bbox_min, bbox_max, res);
     sdf::write_npy(out, &grid)?;

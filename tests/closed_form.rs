@@ -10,7 +10,7 @@ use implicit_psdr::integrator::path::{
     PathRecord, PathVertex, TraceCounters, VertexKind, contribution, detached, sample_light,
 };
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions, render};
-use implicit_psdr::math::{Aabb, Ray};
+use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
 use implicit_psdr::sdf::Sdf;
 use implicit_psdr::{Param, Param3};
@@ -233,16 +233,14 @@ fn nee_scene(emitter: Emitter, rho: f32) -> Scene {
         vec![],
         vec![named("light", emitter)],
     );
-    scene.shapes.push(Shape {
-        name: "patch".into(),
-        sdf: Sdf::Sphere {
+    scene.shapes.push(Shape::new(
+        "patch",
+        Sdf::Sphere {
             center: Param3::new([0.0, -10.0, 0.0]),
             radius: Param::new(0.1),
         },
-        bsdf: diffuse(rho),
-        bounds: Aabb::around(G3::new(0.0, -10.0, 0.0), G3::splat(0.1)),
-        lipschitz: 1.0,
-    });
+        diffuse(rho),
+    ));
     scene
 }
 

@@ -421,7 +421,6 @@ fn path_contribution_dual_matches_central_difference() {
     use implicit_psdr::integrator::path::{
         LightVertex, PathRecord, PathVertex, VertexKind, contribution, detached,
     };
-    use implicit_psdr::math::Aabb;
     use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
     use implicit_psdr::sdf::Sdf;
 
@@ -452,16 +451,14 @@ fn path_contribution_dual_matches_central_difference() {
                 emitter: light,
             }],
         );
-        scene.shapes.push(Shape {
-            name: "patch".into(),
-            sdf: Sdf::Sphere {
+        scene.shapes.push(Shape::new(
+            "patch",
+            Sdf::Sphere {
                 center: Param3::new([0.0, -10.0, 0.0]),
                 radius: Param::new(0.1),
             },
-            bsdf: Bsdf::Diffuse { albedo },
-            bounds: Aabb::around(G3::new(0.0, -10.0, 0.0), G3::splat(0.1)),
-            lipschitz: 1.0,
-        });
+            Bsdf::Diffuse { albedo },
+        ));
         scene
     };
     let (l, rho) = ([3.0, 2.0, 1.0], [0.5, 0.6, 0.7]);

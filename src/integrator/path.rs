@@ -19,7 +19,7 @@ use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::Scalar;
 use crate::scene::{Hit, Intersection, Scene, Surface};
-use crate::trace::{ShapeTrace, sphere_trace};
+use crate::trace::ShapeTrace;
 
 /// What a recorded vertex lies on.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -103,7 +103,7 @@ pub fn occluded(
         let Some((t0, t1)) = scene.trace_interval(shape, ray, t_max) else {
             continue;
         };
-        match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &scene.trace) {
+        match shape.trace(ray, t0, t1, &scene.trace) {
             ShapeTrace::Hit(t) if t < t_max => return true,
             ShapeTrace::Exhausted(_) => counters.exhausted += 1,
             _ => {}

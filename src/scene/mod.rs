@@ -9,20 +9,25 @@ use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::integrator::IntegratorKind;
+use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
+use crate::scalar::{Param3, Scalar};
 use crate::sdf::Sdf;
 use crate::trace::{ShapeTrace, TraceSettings, sphere_trace};
 
-/// An implicit surface with its material.
+/// An implicit surface with its material, rigidly translated by `translate` (zero unless a derivative or a
+/// finite difference moves the whole shape): the surface is `{x : sdf(x − translate) = 0}`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shape {
     /// Unique name (used for parameter names and `bake --shape`).
     pub name: String,
-    /// The implicit function.
+    /// The implicit function, in the shape's own coordinates.
     pub sdf: Sdf,
     /// The material.
     pub bsdf: Bsdf,
-    /// Box around the surface, from [`Sdf::bounds`] (possibly infinite).
+    /// Rigid translation of the whole shape (parameters `<name>.translate.x|y|z`).
+    pub translate: Param3,
+    /// World-space box around the surface: [`Sdf::bounds`] moved by `translate` (possibly infinite).
     pub bounds: Aabb,
     /// Lipschitz bound of the SDF, from [`Sdf::lipschitz`].
     pub lipschitz: f32,
@@ -31,15 +36,72 @@ pub struct Shape {
 impl Shape {
     /// A shape, with its bounds and Lipschitz bound computed from the SDF.
     pub fn new(name: impl Into<String>, sdf: Sdf, bsdf: Bsdf) -> Self {
-        let bounds = sdf.bounds();
+        Self::translated(name, sdf, bsdf, Param3::new([0.0; 3]))
+    }
+
+    /// A shape moved rigidly by `translate`.
+    pub fn translated(name: impl Into<String>, sdf: Sdf, bsdf: Bsdf, translate: Param3) -> Self {
+        let t = translate.value();
+        let local = sdf.bounds();
+        let bounds = Aabb::new(local.min + t, local.max + t);
         let lipschitz = sdf.lipschitz();
         Self {
             name: name.into(),
             sdf,
             bsdf,
+            translate,
             bounds,
             lipschitz,
         }
+    }
+
+    /// `φ(p)` in world coordinates, generic (lifted parameters, translation included).
+    #[inline]
+    pub fn eval<S: Scalar>(&self, p: Vec3<S>) -> S {
+        self.sdf.eval(p - self.translate.get::<S>())
+    }
+
+    /// `φ(p)` in `f32`.
+    #[inline]
+    pub fn eval_f32(&self, p: glam::Vec3) -> f32 {
+        self.sdf.eval_f32(p - self.translate.value())
+    }
+
+    /// `∇φ(p)` (not normalised).
+    #[inline]
+    pub fn gradient(&self, p: glam::Vec3) -> glam::Vec3 {
+        self.sdf.gradient(p - self.translate.value())
+    }
+
+    /// Outward unit normal at `p`.
+    #[inline]
+    pub fn normal(&self, p: glam::Vec3) -> glam::Vec3 {
+        self.sdf.normal(p - self.translate.value())
+    }
+
+    /// Total curvature `κ = ∇·n` at `p`.
+    #[inline]
+    pub fn curvature(&self, p: glam::Vec3) -> f32 {
+        self.sdf.curvature(p - self.translate.value())
+    }
+
+    /// The ray in the shape's own coordinates (same direction and parameter `t`).
+    #[inline]
+    pub fn local_ray(&self, ray: &Ray) -> Ray {
+        Ray::new(ray.o - self.translate.value(), ray.d)
+    }
+
+    /// First crossing of the surface along `ray` in `[t0, t1]` (see [`sphere_trace`]).
+    #[inline]
+    pub fn trace(&self, ray: &Ray, t0: f32, t1: f32, settings: &TraceSettings) -> ShapeTrace {
+        sphere_trace(
+            &self.sdf,
+            self.lipschitz,
+            &self.local_ray(ray),
+            t0,
+            t1,
+            settings,
+        )
     }
 }
 
@@ -212,7 +274,7 @@ impl Scene {
             Some(surface) => {
                 let p = ray.at(nearest.t);
                 let n = match surface {
-                    Surface::Shape(i) => self.shapes[i].sdf.normal(p),
+                    Surface::Shape(i) => self.shapes[i].normal(p),
                     Surface::Emitter(_) => nearest.normal,
                 };
                 Intersection::Hit(Hit {
@@ -230,8 +292,7 @@ impl Scene {
     /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
     #[inline]
     fn trace_shape(&self, i: usize, ray: &Ray, t0: f32, t1: f32, nearest: &mut Nearest) {
-        let shape = &self.shapes[i];
-        match sphere_trace(&shape.sdf, shape.lipschitz, ray, t0, t1, &self.trace) {
+        match self.shapes[i].trace(ray, t0, t1, &self.trace) {
             ShapeTrace::Hit(t) if t < nearest.t => {
                 nearest.t = t;
                 nearest.surface = Some(Surface::Shape(i));
@@ -260,5 +321,57 @@ impl Scene {
         let floor = p.abs().max_element() * (32.0 * f32::EPSILON);
         let offset = (4.0 * self.trace.eps).max(floor);
         p + n * if n.dot(w) >= 0.0 { offset } else { -offset }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::Filter;
+
+    fn scene_with(shape: Shape) -> Scene {
+        let camera = Camera::new(
+            glam::Vec3::new(0.0, 0.0, 5.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+            40.0,
+            8,
+            8,
+            Filter::Tent,
+        );
+        Scene::new(camera, IntegratorKind::Direct, 1, vec![shape], vec![])
+    }
+
+    #[test]
+    fn translated_shape_matches_moved_primitive() {
+        let bsdf = Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        };
+        let moved = scene_with(Shape::new("a", Sdf::sphere([0.3, -0.2, 0.1], 1.0), bsdf));
+        let translated = scene_with(Shape::translated(
+            "a",
+            Sdf::sphere([0.0, 0.0, 0.0], 1.0),
+            bsdf,
+            Param3::new([0.3, -0.2, 0.1]),
+        ));
+        assert_eq!(moved.shapes[0].bounds, translated.shapes[0].bounds);
+        for (x, y) in [(0.0, 0.0), (0.5, -0.4), (-0.9, 0.3), (1.2, 1.2)] {
+            let ray = Ray::new(glam::Vec3::new(x, y, 5.0), -glam::Vec3::Z);
+            match (
+                moved.intersect(&ray, f32::INFINITY),
+                translated.intersect(&ray, f32::INFINITY),
+            ) {
+                (Intersection::Hit(a), Intersection::Hit(b)) => {
+                    assert!(
+                        (a.t - b.t).abs() < 1e-4 && (a.n - b.n).length() < 1e-4,
+                        "{a:?} {b:?}"
+                    );
+                    let p = crate::math::Vec3::<f32>::from(b.p);
+                    assert!(translated.shapes[0].eval(p).abs() < 1e-4);
+                }
+                (Intersection::Miss, Intersection::Miss) => {}
+                other => panic!("({x}, {y}): {other:?}"),
+            }
+        }
     }
 }
