@@ -2,6 +2,7 @@
 //! Parsing lives in [`load`]; rendering types never see serde.
 
 mod json;
+mod params;
 
 pub use json::{load, parse};
 
