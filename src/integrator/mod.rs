@@ -5,6 +5,7 @@
 //! vertex. A pixel is the mean of its samples' radiances: the film offset of each sample is drawn
 //! exactly from the pixel filter, so every sample's filter weight over its density is 1.
 
+pub mod attach;
 pub mod derivative;
 pub mod fd;
 pub mod path;

@@ -343,6 +343,46 @@ pub fn trace_path(
     }
 }
 
+/// Which recorded point an [`Attach`] is asked to attach.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Anchor {
+    /// The camera origin `x0` (a point: its `J` is ignored).
+    Camera,
+    /// A point on shape `i` of [`Scene::shapes`].
+    Shape(usize),
+    /// A point on finite emitter `i` of [`Scene::emitters`].
+    Emitter(usize),
+}
+
+/// A recorded vertex in scalar type `S`: its position, unit normal and area factor `J` (the density of
+/// the vertex is per unit area of the reference surface, DESIGN §3, so the contribution carries `J`).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Attached<S> {
+    /// Position.
+    pub x: Vec3<S>,
+    /// Unit normal.
+    pub n: Vec3<S>,
+    /// Area element of the moving surface per unit area of the reference surface (1 at the primal).
+    pub j: S,
+}
+
+/// How the recorded `f32` vertices of a path enter the contribution in `S`.
+///
+/// Any `Fn(p, n) -> (x, n)` closure (such as [`detached`]) is an `Attach` with `J = 1` that ignores the
+/// anchor; the derivative pass uses [`super::attach::SceneAttach`].
+pub trait Attach<S: Scalar> {
+    /// The vertex recorded at `p` with normal `n`, lying on `at`, in `S`.
+    fn attach(&self, at: Anchor, p: glam::Vec3, n: glam::Vec3) -> Attached<S>;
+}
+
+impl<S: Scalar, F: Fn(glam::Vec3, glam::Vec3) -> (Vec3<S>, Vec3<S>)> Attach<S> for F {
+    #[inline(always)]
+    fn attach(&self, _at: Anchor, p: glam::Vec3, n: glam::Vec3) -> Attached<S> {
+        let (x, n) = self(p, n);
+        Attached { x, n, j: S::one() }
+    }
+}
+
 /// Positions and normals of recorded vertices as constants (the image pass).
 #[inline]
 pub fn detached<S: Scalar>(p: glam::Vec3, n: glam::Vec3) -> (Vec3<S>, Vec3<S>) {
@@ -351,16 +391,31 @@ pub fn detached<S: Scalar>(p: glam::Vec3, n: glam::Vec3) -> (Vec3<S>, Vec3<S>) {
 
 /// The contribution `f(x̄) / p(x̄)` of a recorded path (with its next-event branches), evaluated in `S`.
 ///
-/// `attach(p, n)` gives each finite vertex's position and normal in `S` (use [`detached`] for the image);
-/// it is applied to the camera, the chain vertices and the light points, not to directions at infinity.
+/// `attach` gives each finite vertex's position, normal and area factor in `S` (use [`detached`] for the
+/// image); it is applied to the camera, the chain vertices and the light points, not to directions at
+/// infinity. Every attached vertex but the camera multiplies the contribution by its `J`.
+#[inline]
 pub fn contribution<S: Scalar>(
     scene: &Scene,
     record: &PathRecord,
-    attach: impl Fn(glam::Vec3, glam::Vec3) -> (Vec3<S>, Vec3<S>),
+    attach: impl Attach<S>,
 ) -> Vec3<S> {
+    contribution_parts(scene, record, &attach).0
+}
+
+/// [`contribution`], also returning the attached first vertex `x1` when it is a finite point (the
+/// derivative pass needs its moving projection onto the film).
+pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
+    scene: &Scene,
+    record: &PathRecord,
+    attach: &A,
+) -> (Vec3<S>, Option<Attached<S>>) {
     let mut radiance = Vec3::<S>::zero();
     let mut beta = Vec3::splat(S::one());
-    let (mut prev_p, _) = attach(record.camera, glam::Vec3::ZERO);
+    let mut first = None;
+    let mut prev_p = attach
+        .attach(Anchor::Camera, record.camera, glam::Vec3::ZERO)
+        .x;
     // The previous scattering vertex: (position, normal, outgoing direction, shape index).
     type Scatter<S> = (Vec3<S>, Vec3<S>, Vec3<S>, usize);
     let mut scatter: Option<Scatter<S>> = None;
@@ -375,19 +430,28 @@ pub fn contribution<S: Scalar>(
                 }
                 let le = scene.emitters[e].emitter.emitted(prev_p, -w, -w);
                 radiance += beta * le * S::constant(v.mis);
-                return radiance;
+                return (radiance, first);
             }
             VertexKind::Emitter(e) | VertexKind::Shape(e) => {
-                let (x, n) = attach(v.p, v.n);
+                let anchor = match v.kind {
+                    VertexKind::Emitter(_) => Anchor::Emitter(e),
+                    _ => Anchor::Shape(e),
+                };
+                let a = attach.attach(anchor, v.p, v.n);
+                if i == 0 {
+                    first = Some(a);
+                }
+                let (x, n) = (a.x, a.n);
                 if let Some((xp, xn, wo, s)) = scatter {
                     let f = scene.shapes[s].bsdf.eval(xn, direction(xp, x), wo);
                     beta = beta * f * (geometry_term(xp, xn, x, n) / v.pdf);
                 }
+                beta = beta * a.j;
                 let wo = direction(x, prev_p);
                 if let VertexKind::Emitter(_) = v.kind {
                     let le = scene.emitters[e].emitter.emitted(x, n, wo);
                     radiance += beta * le * S::constant(v.mis);
-                    return radiance;
+                    return (radiance, first);
                 }
                 let s = e;
                 while let Some(l) = lights.next_if(|l| l.from == i) {
@@ -397,11 +461,12 @@ pub fn contribution<S: Scalar>(
                         let w = Vec3::<S>::constant(l.p);
                         bsdf.eval(n, w, wo) * (abs_cos(n, w) / l.pdf) * emitter.emitted(x, -w, -w)
                     } else {
-                        let (y, ny) = attach(l.p, l.n);
-                        let wl = direction(x, y);
+                        let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n);
+                        let wl = direction(x, y.x);
                         bsdf.eval(n, wl, wo)
-                            * (geometry_term(x, n, y, ny) / l.pdf)
-                            * emitter.emitted(y, ny, -wl)
+                            * (geometry_term(x, n, y.x, y.n) / l.pdf)
+                            * emitter.emitted(y.x, y.n, -wl)
+                            * y.j
                     };
                     radiance += beta * contrib * S::constant(l.mis);
                 }
@@ -410,5 +475,5 @@ pub fn contribution<S: Scalar>(
             }
         }
     }
-    radiance
+    (radiance, first)
 }

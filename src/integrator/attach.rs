@@ -1,0 +1,705 @@
+//! Attached vertices (DESIGN.md §3): the points of a path traced in `f32`, moved to first order with the
+//! scene parameters, in any [`Scalar`] type.
+//!
+//! - **Shape vertex** `p` (unit normal `n`): `φ_S = φ(p; π)` with lifted parameters gives the normal
+//!   velocity `V_S = −(φ_S − detach φ_S)/|∇φ(p)|` (primal zero), the position `x_S = p + V_S n` and the area
+//!   factor `J_S = 1 + κ(p) V_S` (`∂πJ = κV`, seed §1 eq. 11; `κ` primal only).
+//!   The normal moves with the surface: at the moving point, `∇φ(x(π); π) = ∇φ(p) + π (H ∂πx + ∂π∇φ)`, so
+//!   `n_S = normalize(∇φ_S(p) + (H n) V_S)`, `∂πn = (I − nnᵀ)(H n V' + ∂π∇φ)/|∇φ|`. `∇φ_S(p)` (the
+//!   gradient with lifted parameters) comes from one evaluation in [`Grad`]`<S>`, a spatial gradient dual
+//!   whose coefficients are `S`; `H` (primal) comes from [`crate::sdf::Sdf::hessian`], which `κ` needs
+//!   anyway.
+//! - **Emitter vertex**: emitters move by their parameters keeping the point's relative position: a
+//!   rectangle point at relative coordinates `(s, t)` goes to `c_S + u s a_S + v t b_S` with `J = a_S b_S /
+//!   (a b)`, a sphere point to `c_S + r_S n` with `J = r_S² / r²`; normals do not move.
+//! - **Camera**: the lifted origin.
+//!
+//! Every attached quantity has exactly the recorded primal (position, normal, `J = 1`), so a derivative
+//! pass reproduces the image bit for bit. Shapes and emitters without a selected parameter are attached
+//! as constants (no Hessian).
+
+use super::path::{Anchor, Attach, Attached};
+use crate::bsdf::Bsdf;
+use crate::emitter::Emitter;
+use crate::math::Vec3;
+use crate::scalar::{Param, Param3, Scalar, Slot};
+use crate::scene::{Scene, Shape};
+use crate::sdf::Sdf;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A first-order dual number in the three spatial directions with coefficients in `S`: `v + Σ g_i ε_i`.
+/// Evaluating `φ` at a seeded point gives `φ` and `∇φ` as `S` values, i.e. with their parameter
+/// derivatives (mixed partials `∂π∇φ`). Scene parameters lift into `v` (constants in space).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Grad<S> {
+    /// The value.
+    pub v: S,
+    /// The spatial gradient.
+    pub g: [S; 3],
+}
+
+impl<S: Scalar> Grad<S> {
+    /// The point `p` seeded as the spatial variable: `p_i` has gradient `e_i`.
+    #[inline]
+    pub fn seed(p: glam::Vec3) -> Vec3<Self> {
+        let (z, o) = (S::zero(), S::one());
+        Vec3::new(
+            Self {
+                v: S::constant(p.x),
+                g: [o, z, z],
+            },
+            Self {
+                v: S::constant(p.y),
+                g: [z, o, z],
+            },
+            Self {
+                v: S::constant(p.z),
+                g: [z, z, o],
+            },
+        )
+    }
+
+    /// The chain rule for a unary function with value `v` and derivative `d` (both in `S`).
+    #[inline(always)]
+    fn chain(self, v: S, d: S) -> Self {
+        Self {
+            v,
+            g: self.g.map(|g| g * d),
+        }
+    }
+}
+
+impl<S: Scalar> Add for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            v: self.v + o.v,
+            g: [self.g[0] + o.g[0], self.g[1] + o.g[1], self.g[2] + o.g[2]],
+        }
+    }
+}
+
+impl<S: Scalar> Sub for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            v: self.v - o.v,
+            g: [self.g[0] - o.g[0], self.g[1] - o.g[1], self.g[2] - o.g[2]],
+        }
+    }
+}
+
+impl<S: Scalar> Mul for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Self {
+            v: self.v * o.v,
+            g: std::array::from_fn(|i| self.g[i] * o.v + o.g[i] * self.v),
+        }
+    }
+}
+
+impl<S: Scalar> Div for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        // (a/b)' = (a' − (a/b) b') / b.
+        let q = self.v / o.v;
+        let inv = o.v.recip();
+        Self {
+            v: q,
+            g: std::array::from_fn(|i| (self.g[i] - q * o.g[i]) * inv),
+        }
+    }
+}
+
+impl<S: Scalar> Neg for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self {
+            v: -self.v,
+            g: self.g.map(|g| -g),
+        }
+    }
+}
+
+impl<S: Scalar> Add<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, c: f32) -> Self {
+        Self {
+            v: self.v + c,
+            g: self.g,
+        }
+    }
+}
+
+impl<S: Scalar> Sub<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, c: f32) -> Self {
+        Self {
+            v: self.v - c,
+            g: self.g,
+        }
+    }
+}
+
+impl<S: Scalar> Mul<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, c: f32) -> Self {
+        Self {
+            v: self.v * c,
+            g: self.g.map(|g| g * c),
+        }
+    }
+}
+
+impl<S: Scalar> Div<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, c: f32) -> Self {
+        Self {
+            v: self.v / c,
+            g: self.g.map(|g| g / c),
+        }
+    }
+}
+
+macro_rules! assign_ops {
+    ($($tr:ident $f:ident $op:tt),*) => {$(
+        impl<S: Scalar> $tr for Grad<S> {
+            #[inline(always)]
+            fn $f(&mut self, o: Self) {
+                *self = *self $op o;
+            }
+        }
+    )*};
+}
+assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
+
+impl<S: Scalar> Scalar for Grad<S> {
+    #[inline(always)]
+    fn constant(v: f32) -> Self {
+        Self {
+            v: S::constant(v),
+            g: [S::zero(); 3],
+        }
+    }
+    #[inline(always)]
+    fn primal(self) -> f32 {
+        self.v.primal()
+    }
+    #[inline(always)]
+    fn lift(value: f32, slot: Slot) -> Self {
+        Self {
+            v: S::lift(value, slot),
+            g: [S::zero(); 3],
+        }
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        let s = self.v.sqrt();
+        self.chain(s, (s * 2.0).recip())
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        let e = self.v.exp();
+        self.chain(e, e)
+    }
+    #[inline]
+    fn ln(self) -> Self {
+        self.chain(self.v.ln(), self.v.recip())
+    }
+    #[inline]
+    fn sin(self) -> Self {
+        self.chain(self.v.sin(), self.v.cos())
+    }
+    #[inline]
+    fn cos(self) -> Self {
+        self.chain(self.v.cos(), -self.v.sin())
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        // ∇atan2(y, x) = (x ∇y − y ∇x)/(x² + y²); zero at the origin, as the other types.
+        let v = self.v.atan2(x.v);
+        let r2 = x.v * x.v + self.v * self.v;
+        if r2.primal() > 0.0 {
+            let inv = r2.recip();
+            Self {
+                v,
+                g: std::array::from_fn(|i| (x.v * self.g[i] - self.v * x.g[i]) * inv),
+            }
+        } else {
+            Self {
+                v,
+                g: [S::zero(); 3],
+            }
+        }
+    }
+    #[inline]
+    fn acos(self) -> Self {
+        let p = self.v.primal();
+        if p >= 1.0 || p <= -1.0 {
+            // The clamp: derivative zero, as for the other types.
+            Self::lift_value(self.v.acos())
+        } else {
+            let d = -((-(self.v * self.v) + 1.0).sqrt().recip());
+            self.chain(self.v.acos(), d)
+        }
+    }
+    #[inline]
+    fn powf(self, n: f32) -> Self {
+        self.chain(self.v.powf(n), self.v.powf(n - 1.0) * n)
+    }
+}
+
+impl<S: Scalar> Grad<S> {
+    /// `v` with a zero spatial gradient.
+    #[inline(always)]
+    fn lift_value(v: S) -> Self {
+        Self {
+            v,
+            g: [S::zero(); 3],
+        }
+    }
+}
+
+/// `1 + (x − detach x)/primal x`: the ratio `x / x_primal` with a primal of exactly 1 (rounding in the
+/// primal of `x` cannot leak into the image). 1 when the primal is zero or not finite.
+#[inline]
+pub fn unit_ratio<S: Scalar>(x: S) -> S {
+    let p = x.primal();
+    if p != 0.0 && p.is_finite() {
+        (x - x.detach()) / p + 1.0
+    } else {
+        S::one()
+    }
+}
+
+/// `v` with its primal replaced by exactly `primal` (the derivative kept).
+#[inline]
+fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
+    Vec3::constant(primal) + (v - v.detach())
+}
+
+/// Calls `f` on every parameter of `sdf`.
+pub fn sdf_params(sdf: &mut Sdf, f: &mut dyn FnMut(&mut Param)) {
+    let p3 = |p: &mut Param3, f: &mut dyn FnMut(&mut Param)| p.c.iter_mut().for_each(&mut *f);
+    match sdf {
+        Sdf::Sphere { center, radius } => {
+            p3(center, f);
+            f(radius);
+        }
+        Sdf::Box {
+            center,
+            half_size,
+            rounding,
+        } => {
+            p3(center, f);
+            p3(half_size, f);
+            f(rounding);
+        }
+        Sdf::Torus {
+            center,
+            major_radius,
+            minor_radius,
+            ..
+        } => {
+            p3(center, f);
+            f(major_radius);
+            f(minor_radius);
+        }
+        Sdf::Cylinder {
+            center,
+            radius,
+            half_height,
+            rounding,
+            ..
+        } => {
+            p3(center, f);
+            f(radius);
+            f(half_height);
+            f(rounding);
+        }
+        Sdf::Capsule { a, b, radius } => {
+            p3(a, f);
+            p3(b, f);
+            f(radius);
+        }
+        Sdf::Plane { offset, .. } => f(offset),
+        Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
+            children.iter_mut().for_each(|c| sdf_params(c, f))
+        }
+        Sdf::SmoothUnion { children, k } => {
+            children.iter_mut().for_each(|c| sdf_params(c, f));
+            f(k);
+        }
+        Sdf::Transform {
+            translate,
+            angle,
+            scale,
+            child,
+            ..
+        } => {
+            p3(translate, f);
+            f(angle);
+            f(scale);
+            sdf_params(child, f);
+        }
+        Sdf::Grid { .. } => {}
+    }
+}
+
+/// Calls `f` on every parameter of `shape` (its SDF, its translation, its material).
+pub fn shape_params(shape: &mut Shape, f: &mut dyn FnMut(&mut Param)) {
+    sdf_params(&mut shape.sdf, f);
+    shape.translate.c.iter_mut().for_each(&mut *f);
+    match &mut shape.bsdf {
+        Bsdf::Diffuse { albedo } => albedo.c.iter_mut().for_each(&mut *f),
+    }
+}
+
+/// Calls `f` on every parameter of `emitter`.
+pub fn emitter_params(emitter: &mut Emitter, f: &mut dyn FnMut(&mut Param)) {
+    match emitter {
+        Emitter::Rectangle {
+            center,
+            size,
+            radiance,
+            ..
+        } => {
+            center.c.iter_mut().for_each(&mut *f);
+            size.iter_mut().for_each(&mut *f);
+            radiance.c.iter_mut().for_each(&mut *f);
+        }
+        Emitter::Sphere {
+            center,
+            radius,
+            radiance,
+        } => {
+            center.c.iter_mut().for_each(&mut *f);
+            f(radius);
+            radiance.c.iter_mut().for_each(&mut *f);
+        }
+        Emitter::Constant { radiance } => radiance.c.iter_mut().for_each(&mut *f),
+    }
+}
+
+/// Calls `f` on every parameter of the scene (camera, shapes, emitters).
+pub fn scene_params(scene: &mut Scene, f: &mut dyn FnMut(&mut Param)) {
+    let c = &mut scene.camera;
+    for p in [&mut c.origin, &mut c.target, &mut c.up] {
+        p.c.iter_mut().for_each(&mut *f);
+    }
+    f(&mut c.fov_y);
+    for s in &mut scene.shapes {
+        shape_params(s, f);
+    }
+    for e in &mut scene.emitters {
+        emitter_params(&mut e.emitter, f);
+    }
+}
+
+/// A copy of `scene` for the derivative pass over slots `lo .. lo + width`: slot `k` in that window
+/// becomes `k − lo`, every other slot none.
+pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
+    let mut s = scene.clone();
+    scene_params(&mut s, &mut |p: &mut Param| {
+        p.slot = p.slot.and_then(|k| {
+            let k = usize::from(k);
+            (k >= lo && k < lo + width).then(|| (k - lo) as u16)
+        });
+    });
+    s
+}
+
+/// Whether the geometry of a shape (SDF or translation, not the material) has a selected parameter.
+fn geometry_selected(shape: &Shape) -> bool {
+    let mut any = false;
+    let mut s = shape.clone();
+    sdf_params(&mut s.sdf, &mut |p: &mut Param| any |= p.slot.is_some());
+    s.translate.c.iter().for_each(|p| any |= p.slot.is_some());
+    any
+}
+
+/// Whether the position or size of an emitter has a selected parameter (its radiance does not move it).
+fn geometry_selected_emitter(emitter: &Emitter) -> bool {
+    let sel = |p: &Param| p.slot.is_some();
+    match emitter {
+        Emitter::Rectangle { center, size, .. } => center.c.iter().any(sel) || size.iter().any(sel),
+        Emitter::Sphere { center, radius, .. } => center.c.iter().any(sel) || sel(radius),
+        Emitter::Constant { .. } => false,
+    }
+}
+
+/// The [`Attach`] of the derivative pass: attached vertices of [`Scene`]'s shapes, emitters and camera
+/// with the scene's selected parameters (see the [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct SceneAttach<'a> {
+    scene: &'a Scene,
+    /// Per shape: does its geometry depend on a selected parameter?
+    shape_moves: Vec<bool>,
+    /// Per emitter: does its position or size depend on a selected parameter?
+    emitter_moves: Vec<bool>,
+}
+
+impl<'a> SceneAttach<'a> {
+    /// Precomputes which shapes and emitters move with the selected parameters.
+    pub fn new(scene: &'a Scene) -> Self {
+        Self {
+            scene,
+            shape_moves: scene.shapes.iter().map(geometry_selected).collect(),
+            emitter_moves: scene
+                .emitters
+                .iter()
+                .map(|e| geometry_selected_emitter(&e.emitter))
+                .collect(),
+        }
+    }
+
+    /// The attached point `p` (recorded normal `n`) of shape `i`.
+    pub fn shape_vertex<S: Scalar>(&self, i: usize, p: glam::Vec3, n: glam::Vec3) -> Attached<S> {
+        let constant = Attached {
+            x: Vec3::constant(p),
+            n: Vec3::constant(n),
+            j: S::one(),
+        };
+        if !self.shape_moves[i] {
+            return constant;
+        }
+        let shape = &self.scene.shapes[i];
+        let r = shape.eval::<Grad<S>>(Grad::seed(p));
+        let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
+        let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
+        let gl = g.length();
+        if !(gl > 1e-12 && gl.is_finite()) {
+            return constant;
+        }
+        let v = -(r.v - r.v.detach()) / gl;
+        let kappa = curvature(g, h, gl);
+        let x = Vec3::constant(p) + Vec3::constant(n) * v;
+        // ∇φ at the moving point with the moving parameters, to first order.
+        let hn = h * n;
+        let moved = (grad + Vec3::constant(hn) * v).normalize_or_zero();
+        Attached {
+            x: with_primal(x, p),
+            n: with_primal(moved, n),
+            j: v * kappa + 1.0,
+        }
+    }
+
+    /// The attached point `p` (normal `n`) of finite emitter `e`.
+    pub fn emitter_vertex<S: Scalar>(&self, e: usize, p: glam::Vec3, n: glam::Vec3) -> Attached<S> {
+        let constant = Attached {
+            x: Vec3::constant(p),
+            n: Vec3::constant(n),
+            j: S::one(),
+        };
+        if !self.emitter_moves[e] {
+            return constant;
+        }
+        match &self.scene.emitters[e].emitter {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u,
+                size,
+                ..
+            } => {
+                let v = normal.cross(*u);
+                let local = p - center.value();
+                let (a, b) = (size[0].value, size[1].value);
+                // Relative coordinates of the point, kept as the rectangle moves and scales.
+                let (s, t) = (local.dot(*u) / a, local.dot(v) / b);
+                let (a_s, b_s) = (size[0].get::<S>(), size[1].get::<S>());
+                let x = center.get::<S>()
+                    + Vec3::constant(*u) * (a_s * s)
+                    + Vec3::constant(v) * (b_s * t);
+                Attached {
+                    x: with_primal(x, p),
+                    n: Vec3::constant(n),
+                    j: unit_ratio(a_s * b_s),
+                }
+            }
+            Emitter::Sphere { center, radius, .. } => {
+                let r_s = radius.get::<S>();
+                let dir = (p - center.value()).normalize_or_zero();
+                let x = center.get::<S>() + Vec3::constant(dir) * r_s;
+                Attached {
+                    x: with_primal(x, p),
+                    n: Vec3::constant(n),
+                    j: unit_ratio(r_s * r_s),
+                }
+            }
+            Emitter::Constant { .. } => constant,
+        }
+    }
+}
+
+/// `κ = (tr H − gᵀHg/|g|²)/|g|`, 0 where not finite.
+#[inline]
+fn curvature(g: glam::Vec3, h: glam::Mat3, gl: f32) -> f32 {
+    let tr = h.x_axis.x + h.y_axis.y + h.z_axis.z;
+    let k = (tr - g.dot(h * g) / (gl * gl)) / gl;
+    if k.is_finite() { k } else { 0.0 }
+}
+
+impl<S: Scalar> Attach<S> for SceneAttach<'_> {
+    #[inline]
+    fn attach(&self, at: Anchor, p: glam::Vec3, n: glam::Vec3) -> Attached<S> {
+        match at {
+            Anchor::Camera => {
+                let o = self.scene.camera.origin.get::<S>();
+                Attached {
+                    x: with_primal(o, p),
+                    n: Vec3::zero(),
+                    j: S::one(),
+                }
+            }
+            Anchor::Shape(i) => self.shape_vertex(i, p, n),
+            Anchor::Emitter(e) => self.emitter_vertex(e, p, n),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::film::Filter;
+    use crate::integrator::IntegratorKind;
+    use crate::scalar::Dual32;
+
+    fn scene_with(sdf: Sdf) -> Scene {
+        let camera = Camera::new(
+            glam::Vec3::new(0.0, 0.0, 5.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+            40.0,
+            8,
+            8,
+            Filter::Tent,
+        );
+        let bsdf = Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        };
+        Scene::new(
+            camera,
+            IntegratorKind::Direct,
+            1,
+            vec![Shape::new("s", sdf, bsdf)],
+            vec![],
+        )
+    }
+
+    /// Two spheres blended by a smooth union; parameter: the second child's centre x (slot 0 when
+    /// `select`), value `cx`.
+    fn blob(cx: f32, select: bool) -> Scene {
+        let mut b = Sdf::sphere([cx, 0.3, 0.0], 0.7);
+        if let (Sdf::Sphere { center, .. }, true) = (&mut b, select) {
+            center.c[0].slot = Some(0);
+        }
+        scene_with(Sdf::smooth_union(vec![Sdf::sphere([0.0; 3], 1.0), b], 0.5))
+    }
+
+    /// A point on the surface along direction `d` from the origin, by bisection.
+    fn surface_point(shape: &Shape, d: glam::Vec3) -> glam::Vec3 {
+        let (mut lo, mut hi) = (0.0f32, 4.0f32);
+        for _ in 0..60 {
+            let m = 0.5 * (lo + hi);
+            if shape.eval_f32(d * m) < 0.0 {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        d * (0.5 * (lo + hi))
+    }
+
+    #[test]
+    fn grad_matches_gradient_and_mixed_partial() {
+        let cx = 1.2;
+        let scene = blob(cx, true);
+        let shape = &scene.shapes[0];
+        let p = glam::Vec3::new(0.9, 0.6, 0.2);
+        let r = shape.eval::<Grad<Dual32>>(Grad::seed(p));
+        let g = shape.gradient(p);
+        let h = 1e-2;
+        let gp = blob(cx + h, false).shapes[0].gradient(p);
+        let gm = blob(cx - h, false).shapes[0].gradient(p);
+        for i in 0..3 {
+            assert!((r.g[i].re - g[i]).abs() < 1e-5, "{:?} vs {g}", r.g);
+            let fd = (gp[i] - gm[i]) / (2.0 * h);
+            assert!(
+                (r.g[i].eps - fd).abs() < 2e-3 * (1.0 + fd.abs()),
+                "∂π∇φ_{i}: {} vs {fd}",
+                r.g[i].eps
+            );
+        }
+    }
+
+    /// The attached point and normal against the perturbed surface: `x(±h) = p ± h ∂πx` lies on the
+    /// surface with parameter `π ± h` (to second order), and the normal there is `n ± h ∂πn`.
+    #[test]
+    fn attached_normal_matches_perturbed_surface() {
+        let cx = 1.2;
+        let scene = blob(cx, true);
+        let attach = SceneAttach::new(&scene);
+        let h = 2e-3;
+        let (plus, minus) = (blob(cx + h, false), blob(cx - h, false));
+        let mut largest = 0.0f32;
+        for d in [
+            glam::Vec3::new(1.0, 0.4, 0.1),
+            glam::Vec3::new(0.6, 0.8, -0.3),
+            glam::Vec3::new(0.9, -0.2, 0.5),
+            glam::Vec3::new(0.2, 1.0, 0.0),
+        ] {
+            let shape = &scene.shapes[0];
+            let p = surface_point(shape, d.normalize());
+            let n = shape.normal(p);
+            let a = attach.shape_vertex::<Dual32>(0, p, n);
+            assert_eq!(a.x.primal(), p);
+            assert_eq!(a.n.primal(), n);
+            assert_eq!(a.j.re, 1.0);
+            let dx = glam::Vec3::new(a.x.x.eps, a.x.y.eps, a.x.z.eps);
+            let dn = glam::Vec3::new(a.n.x.eps, a.n.y.eps, a.n.z.eps);
+            let (xp, xm) = (p + dx * h, p - dx * h);
+            // On the perturbed surfaces to second order in h.
+            assert!(plus.shapes[0].eval_f32(xp).abs() < 1e-4);
+            assert!(minus.shapes[0].eval_f32(xm).abs() < 1e-4);
+            let fd = (plus.shapes[0].normal(xp) - minus.shapes[0].normal(xm)) / (2.0 * h);
+            assert!(
+                (dn - fd).length() < 5e-3 * (1.0 + fd.length()),
+                "at {p}: ∂πn = {dn} vs FD {fd}"
+            );
+            largest = largest.max(dn.length());
+            assert!(dn.dot(n).abs() < 1e-5);
+        }
+        assert!(largest > 0.1, "the test must see a moving normal");
+    }
+
+    #[test]
+    fn area_factor_is_kappa_v_on_a_sphere() {
+        // Radius r: V = 1, κ = 2/r, so ∂πJ = 2/r and ∂πx = n.
+        let mut scene = scene_with(Sdf::sphere([0.0; 3], 1.5));
+        if let Sdf::Sphere { radius, .. } = &mut scene.shapes[0].sdf {
+            radius.slot = Some(0);
+        }
+        let attach = SceneAttach::new(&scene);
+        let n = glam::Vec3::new(0.36, 0.48, 0.8);
+        let a = attach.shape_vertex::<Dual32>(0, n * 1.5, n);
+        assert!((a.j.eps - 2.0 / 1.5).abs() < 1e-5, "{}", a.j.eps);
+        for (c, e) in [(a.x.x, n.x), (a.x.y, n.y), (a.x.z, n.z)] {
+            assert!((c.eps - e).abs() < 1e-5);
+        }
+        for c in [a.n.x, a.n.y, a.n.z] {
+            assert!(c.eps.abs() < 1e-5);
+        }
+    }
+}
