@@ -91,6 +91,7 @@ impl<S: Scalar> Sub for Grad<S> {
     }
 }
 
+#[allow(clippy::suspicious_arithmetic_impl)] // The product rule.
 impl<S: Scalar> Mul for Grad<S> {
     type Output = Self;
     #[inline(always)]
@@ -102,6 +103,7 @@ impl<S: Scalar> Mul for Grad<S> {
     }
 }
 
+#[allow(clippy::suspicious_arithmetic_impl)] // The quotient rule.
 impl<S: Scalar> Div for Grad<S> {
     type Output = Self;
     #[inline(always)]

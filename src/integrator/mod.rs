@@ -77,6 +77,9 @@ pub struct RenderStats {
     /// Samples whose radiance was not finite (NaN or infinite); they count as black. The first one is
     /// reported on stderr with its pixel and sample index.
     pub invalid_samples: u64,
+    /// Derivative passes only: samples with a finite radiance but a non-finite derivative (a bug; their
+    /// derivative counts as zero). The first one is reported on stderr with its pixel and sample index.
+    pub invalid_derivatives: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -84,10 +87,12 @@ pub struct RenderStats {
 /// Stream of the [`Sampler`] used by camera paths.
 pub const CAMERA_STREAM: u64 = 0;
 
-/// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
-/// `frame` is `scene.camera.frame::<f32>()`, built once per render.
+/// Traces camera sample `sample` of pixel `(x, y)` into `record`: draws the film offset from the pixel
+/// filter, generates the ray through it and traces the path. Returns the offset (pixels, from the pixel
+/// centre) and the camera ray. `frame` is `scene.camera.frame::<f32>()`, built once per render.
 #[allow(clippy::too_many_arguments)]
-pub fn sample_pixel(
+#[inline]
+pub fn trace_sample(
     scene: &Scene,
     frame: &CameraFrame<f32>,
     seed: u64,
@@ -96,7 +101,7 @@ pub fn sample_pixel(
     sample: u32,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
-) -> glam::Vec3 {
+) -> (glam::Vec2, crate::math::Ray) {
     let camera = &scene.camera;
     let pixel = y as u64 * camera.width as u64 + x as u64;
     let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
@@ -111,6 +116,23 @@ pub fn sample_pixel(
         record,
         counters,
     );
+    (offset, ray)
+}
+
+/// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
+/// `frame` is `scene.camera.frame::<f32>()`, built once per render.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_pixel(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    seed: u64,
+    x: u32,
+    y: u32,
+    sample: u32,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) -> glam::Vec3 {
+    trace_sample(scene, frame, seed, x, y, sample, record, counters);
     contribution::<f32>(scene, record, detached).into()
 }
 
@@ -187,6 +209,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
         samples: spp as u64 * width as u64 * height as u64,
         exhausted_rays: exhausted.into_inner(),
         invalid_samples: invalid.into_inner(),
+        invalid_derivatives: 0,
         seconds: start.elapsed().as_secs_f64(),
     };
     (image, stats)
