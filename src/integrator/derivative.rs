@@ -236,35 +236,43 @@ fn render_pass<S: Directions>(
                     if !(density > 0.0 && density.is_finite()) {
                         continue;
                     }
-                    let l_ok = finite(l.x, width) && finite(l.y, width) && finite(l.z, width);
+                    let mut scale = jacobian / density;
+                    let ok = finite(l.x, width)
+                        && finite(l.y, width)
+                        && finite(l.z, width)
+                        && finite(scale, width)
+                        && finite(px, width)
+                        && finite(py, width);
+                    let (px, py) = if ok {
+                        (px, py)
+                    } else {
+                        if row.invalid_d == 0 && !reported.swap(true, Ordering::Relaxed) {
+                            eprintln!(
+                                "non-finite derivative (parameters {lo}..{}) at pixel ({x}, {y}), \
+                                 sample {s}: {l:?}, film position ({px:?}, {py:?}), {scale:?}",
+                                lo + width
+                            );
+                        }
+                        row.invalid_d += 1;
+                        l = l.detach();
+                        scale = scale.detach();
+                        (px.detach(), py.detach())
+                    };
                     for jy in (y as i64 - reach).max(0)..=(y as i64 + reach).min(hi - 1) {
                         let dy = py - (jy as f32 + 0.5);
                         if dy.primal().abs() >= radius {
                             continue;
                         }
+                        let band_row = (jy - y as i64 + reach) as usize * w as usize;
                         for jx in (x as i64 - reach).max(0)..=(x as i64 + reach).min(wi - 1) {
                             let dx = px - (jx as f32 + 0.5);
                             if dx.primal().abs() >= radius {
                                 continue;
                             }
-                            let factor = filter.eval(dx, dy) * jacobian / density;
-                            let c = l * factor;
-                            let i = (jy - y as i64 + reach) as usize * w as usize + jx as usize;
-                            if l_ok && finite(factor, width) {
-                                row.f[i] += c;
-                                row.w[i] += factor;
-                            } else {
-                                if row.invalid_d == 0 && !reported.swap(true, Ordering::Relaxed) {
-                                    eprintln!(
-                                        "non-finite derivative (parameters {lo}..{}) at pixel \
-                                         ({x}, {y}), sample {s}: {l:?}, filter factor {factor:?}",
-                                        lo + width
-                                    );
-                                }
-                                row.invalid_d += 1;
-                                row.f[i] += c.detach();
-                                row.w[i] += factor.detach();
-                            }
+                            let factor = filter.eval(dx, dy) * scale;
+                            let i = band_row + jx as usize;
+                            row.f[i] += l * factor;
+                            row.w[i] += factor;
                         }
                     }
                 }
@@ -337,15 +345,21 @@ fn finite<S: Directions>(v: S, width: usize) -> bool {
 }
 
 /// `Σ_i w_i(film)` over the image's pixels `i`: the density of a film point among the samples of all
-/// pixels, per sample per pixel (1 for the tent inside the image: its translates partition unity).
+/// pixels, per sample per pixel. Exactly 1 for the tent away from the image border (its translates
+/// partition unity), where it is not computed.
 #[inline]
 fn mixture_density(filter: &Filter, film: glam::Vec2, width: i64, height: i64) -> f32 {
     let r = filter.radius();
-    let range = |v: f32, n: i64| {
-        let lo = ((v - r - 0.5).floor() as i64).max(0);
-        let hi = ((v + r - 0.5).ceil() as i64).min(n - 1);
-        lo..=hi
+    let inside = |v: f32, n: i64| v >= r && v <= n as f32 - r;
+    if *filter == Filter::Tent && inside(film.x, width) && inside(film.y, height) {
+        return 1.0;
+    }
+    // Pixels whose centre is within r of v: i + 0.5 in (v − r, v + r).
+    let floor = |v: f32| {
+        let i = v as i64;
+        if (i as f32) > v { i - 1 } else { i }
     };
+    let range = |v: f32, n: i64| floor(v - r - 0.5).max(0)..=(floor(v + r - 0.5) + 1).min(n - 1);
     let mut sum = 0.0;
     for jy in range(film.y, height) {
         for jx in range(film.x, width) {
