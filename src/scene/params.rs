@@ -2,48 +2,7 @@
 //! `.r/.g/.b` for colours), can be listed, selected for differentiation (given a derivative slot) and set
 //! (for finite differences).
 //!
-//! # Names
-//!
-//! Names use only ASCII letters, digits, `_`, `-` and `.` (no brackets or spaces, so they need no quoting
-//! in a shell). Object names (shapes, emitters, named sdf nodes) share one namespace and contain no dot,
-//! so the names below are unique.
-//!
-//! - Camera: `camera.origin.x|y|z`, `camera.target.x|y|z`, `camera.up.x|y|z`, `camera.fov_y` (`camera` is
-//!   a reserved object name).
-//! - Shape `s`: `s.translate.x|y|z` (the rigid translation of the whole shape, grids included) and
-//!   `s.albedo.r|g|b` (its diffuse BSDF).
-//! - The shape's sdf tree. Every node has a *prefix* and its fields are `<prefix>.<field>`:
-//!   - a node with a `name` in the scene file has that name as its prefix (`{"type": "torus", "name":
-//!     "ring", ...}` gives `ring.major_radius`), wherever it sits in the tree;
-//!   - the unnamed root node has the shape's name as its prefix (`ball.radius`, `ball.center.x`), except
-//!     an unnamed root *transform*, whose `translate` would collide with the shape's own: its prefix is
-//!     `s.sdf` (`ring.sdf.translate.x`, `ring.sdf.angle`);
-//!   - an unnamed child has its parent's prefix followed by its place, as in the JSON path with the
-//!     index written as a component: `<parent>.children.<i>` for unions, intersections, differences and
-//!     smooth unions (`blob.children.1.radius`), `<parent>.child` for a transform
-//!     (`ring.sdf.child.major_radius`).
-//! - Node fields: sphere `center`, `radius`; box `center`, `half_size`, `rounding`; torus `center`,
-//!   `major_radius`, `minor_radius`; cylinder `center`, `radius`, `half_height`, `rounding`; capsule `a`,
-//!   `b`, `radius`; plane `offset`; smooth union `k`; transform `translate`, `angle` (degrees, present
-//!   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
-//!   intersection and difference have no fields. Grid samples are not parameters (a grid moves with its
-//!   shape's `translate` or an enclosing transform).
-//! - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
-//!   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
-//!   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`
-//!   (`sky.radiance.g`).
-//!
-//! Unit directions (a torus's or cylinder's `axis`, a plane's or rectangle's `normal`, a rectangle's `u`,
-//! a transform's rotation `axis`) are not parameters: they are normalised on input, so a change of one
-//! component is not a change of the surface along that component alone (its derivative would need the
-//! normalisation's projection, and a finite difference would leave the unit sphere). The grid's box is not
-//! one either (the samples are data). Image size, filter, spp and integrator settings are not numbers
-//! of the scene's geometry or light.
-//!
-//! # Order
-//!
-//! [`Scene::parameters`] lists camera, then shapes (translate, sdf tree depth-first in file order, albedo),
-//! then emitters, each in file order: stable across runs and file round trips.
+//! The naming scheme and the order are documented on [`Scene::parameters`].
 
 use super::{NamedEmitter, Scene, Shape};
 use crate::bsdf::Bsdf;
@@ -61,7 +20,7 @@ const RGB: [&str; 3] = ["r", "g", "b"];
 /// How many near matches an unknown-name error lists.
 const MAX_SUGGESTIONS: usize = 3;
 
-/// The prefix of the unnamed root node of shape `shape` (see the module notes).
+/// The prefix of the unnamed root node of shape `shape` (see [`Scene::parameters`]).
 fn root_prefix(shape: &str, sdf: &Sdf) -> String {
     match sdf {
         Sdf::Transform { .. } => format!("{shape}.sdf"),
@@ -240,8 +199,8 @@ mod exclusive {
 
 impl Sdf {
     /// Calls `f` with the full name and value of every parameter in the tree under this node, whose
-    /// prefix is `prefix` (a named node uses its own name instead; see the [module notes](self) for the
-    /// scheme).
+    /// prefix is `prefix` (a named node uses its own name instead; see [`Scene::parameters`] for
+    /// the scheme).
     pub fn visit_params(&self, prefix: &str, f: &mut dyn FnMut(&str, &Param)) {
         shared::sdf(self, prefix, f);
     }
@@ -254,7 +213,7 @@ impl Sdf {
 }
 
 impl Scene {
-    /// Calls `f` with the full name and value of every parameter (see the [module notes](self) for the
+    /// Calls `f` with the full name and value of every parameter (see [`Scene::parameters`] for the
     /// names), in the order of [`Scene::parameters`].
     pub fn visit_params(&self, f: &mut dyn FnMut(&str, &Param)) {
         shared::scene(self, f);
@@ -268,6 +227,50 @@ impl Scene {
     }
 
     /// Every parameter with its current value, in a stable order (camera, shapes, emitters).
+    ///
+    /// ## Names
+    ///
+    /// Names use only ASCII letters, digits, `_`, `-` and `.` (no brackets or spaces, so they need no quoting
+    /// in a shell). Object names (shapes, emitters, named sdf nodes) share one namespace and contain no dot,
+    /// so the names below are unique.
+    ///
+    /// - Camera: `camera.origin.x|y|z`, `camera.target.x|y|z`, `camera.up.x|y|z`, `camera.fov_y` (degrees;
+    ///   `camera` is a reserved object name). `up` is kept as given (the frame is built from it by
+    ///   Gram–Schmidt), so its components are parameters although only its direction matters.
+    /// - Shape `s`: `s.translate.x|y|z` (the rigid translation of the whole shape, grids included) and
+    ///   `s.albedo.r|g|b` (its diffuse BSDF).
+    /// - The shape's sdf tree. Every node has a *prefix* and its fields are `<prefix>.<field>`:
+    ///   - a node with a `name` in the scene file has that name as its prefix (`{"type": "torus", "name":
+    ///     "ring", ...}` gives `ring.major_radius`), wherever it sits in the tree;
+    ///   - the unnamed root node has the shape's name as its prefix (`ball.radius`, `ball.center.x`), except
+    ///     an unnamed root *transform*, whose `translate` would collide with the shape's own: its prefix is
+    ///     `s.sdf` (`ring.sdf.translate.x`, `ring.sdf.angle`);
+    ///   - an unnamed child has its parent's prefix followed by its place, as in the JSON path with the
+    ///     index written as a component: `<parent>.children.<i>` for unions, intersections, differences and
+    ///     smooth unions (`blob.children.1.radius`), `<parent>.child` for a transform
+    ///     (`ring.sdf.child.major_radius`).
+    /// - Node fields: sphere `center`, `radius`; box `center`, `half_size`, `rounding`; torus `center`,
+    ///   `major_radius`, `minor_radius`; cylinder `center`, `radius`, `half_height`, `rounding`; capsule `a`,
+    ///   `b`, `radius`; plane `offset`; smooth union `k`; transform `translate`, `angle` (degrees, present
+    ///   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
+    ///   intersection and difference have no fields. Grid samples are not parameters (a grid moves with its
+    ///   shape's `translate` or an enclosing transform).
+    /// - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
+    ///   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
+    ///   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`
+    ///   (`sky.radiance.g`).
+    ///
+    /// Unit directions (a torus's or cylinder's `axis`, a plane's or rectangle's `normal`, a rectangle's `u`,
+    /// a transform's rotation `axis`) are not parameters: they are normalised on input, so a change of one
+    /// component is not a change of the surface along that component alone (its derivative would need the
+    /// normalisation's projection, and a finite difference would leave the unit sphere). The grid's box is not
+    /// one either (the samples are data). Image size, filter, spp and integrator settings are not numbers
+    /// of the scene's geometry or light.
+    ///
+    /// ## Order
+    ///
+    /// Camera, then shapes (translate, sdf tree depth-first in file order, albedo),
+    /// then emitters, each in file order: stable across runs and file round trips.
     pub fn parameters(&self) -> Vec<(String, f32)> {
         let mut out = Vec::new();
         self.visit_params(&mut |name, p| out.push((name.to_string(), p.value)));
@@ -423,7 +426,7 @@ impl Scene {
         for e in &self.emitters {
             let name = &e.name;
             let mut positive = |field: String, v: f32| {
-                if !(v > 0.0) {
+                if !is_positive(v) {
                     out.push(Error::field(field, format!("must be > 0, got {v}")));
                 }
             };
@@ -443,7 +446,7 @@ impl Scene {
             };
             for (i, c) in RGB.iter().enumerate() {
                 let v = radiance.c[i].value;
-                if !(v >= 0.0) {
+                if !(0.0..).contains(&v) {
                     out.push(Error::field(
                         format!("{name}.radiance.{c}"),
                         format!("must be >= 0, got {v}"),
@@ -458,7 +461,7 @@ impl Scene {
 /// The scene file's rules for the nodes of the tree under `sdf` (prefix `prefix`), as in the parser.
 fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
     let positive = |field: &str, v: f32, out: &mut Vec<Error>| {
-        if !(v > 0.0) {
+        if !is_positive(v) {
             out.push(Error::field(
                 format!("{prefix}.{field}"),
                 format!("must be > 0, got {v}"),
@@ -495,7 +498,7 @@ fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
         } => {
             let (major, minor) = (major_radius.value, minor_radius.value);
             positive("minor_radius", minor, out);
-            if !(major > minor) {
+            if !is_positive(major - minor) {
                 out.push(Error::field(
                     format!("{prefix}.major_radius"),
                     format!("must be > minor_radius ({minor}), got {major}"),
@@ -533,6 +536,11 @@ fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
     }
 }
 
+/// `v > 0`, false for NaN (the rules below must catch NaN, so they test what is allowed).
+fn is_positive(v: f32) -> bool {
+    v > 0.0
+}
+
 /// Up to [`MAX_SUGGESTIONS`] names close to `name`: by edit distance (at most a third of the name's
 /// length, and at least 2), nearest first; failing that, names of the same object (`ball.` for
 /// `ball.radios`).
@@ -550,16 +558,16 @@ fn near_matches(name: &str, names: &[String]) -> Vec<String> {
         .take(MAX_SUGGESTIONS)
         .map(|(_, n)| n.clone())
         .collect();
-    if out.is_empty() {
-        if let Some((object, _)) = name.split_once('.') {
-            let prefix = format!("{object}.");
-            out = names
-                .iter()
-                .filter(|n| n.starts_with(&prefix))
-                .take(MAX_SUGGESTIONS)
-                .cloned()
-                .collect();
-        }
+    if out.is_empty()
+        && let Some((object, _)) = name.split_once('.')
+    {
+        let prefix = format!("{object}.");
+        out = names
+            .iter()
+            .filter(|n| n.starts_with(&prefix))
+            .take(MAX_SUGGESTIONS)
+            .cloned()
+            .collect();
     }
     out
 }
