@@ -743,6 +743,27 @@ fn grid_translate() {
             n.x
         );
     }
+
+    // A baked torus: principal curvatures of both signs (κ from 1/r − 1/(R − r) ≈ 0.83 on the inner
+    // equator to 1/r + 1/(R + r) ≈ 4.33 on the outer one), translated along y (V = n_y).
+    let (lo, hi) = (
+        glam::Vec3::new(-1.1, -0.5, -1.1),
+        glam::Vec3::new(1.1, 0.5, 1.1),
+    );
+    let torus = Sdf::torus([0.0, 0.0, 0.0], glam::Vec3::Y, 0.7, 0.3);
+    let grid = Sdf::grid(bake(&torus, lo, hi, 48), lo, hi).expect("valid grid");
+    let mut translate = Param3::new([0.0, 0.1, 0.0]);
+    translate.c[1] = seeded(0.1);
+    let s = Shape::translated(
+        "t",
+        grid,
+        Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        },
+        translate,
+    );
+    let samples = check("baked torus translate.y", &s, &[around(&s, 0.0)], 1.0, 120);
+    assert!(samples.iter().any(|x| x.kappa < 1.5) && samples.iter().any(|x| x.kappa > 3.5));
 }
 
 #[test]
