@@ -138,11 +138,13 @@ pub fn compare_channel(
     }
 }
 
-/// Names of the channels present in both `a` and `b` that are compared, in `a`'s order: with no
-/// `prefix`, the derivative channels (names starting with `d`: `d.`, `d_interior.`, ...; the image
-/// channels `R`, `G`, `B` are skipped); with a `prefix`, exactly the names starting with it.
+/// Names of the channels present in both `a` and `b` that are compared: with no `prefix`, the
+/// derivative channels (names starting with `d`: `d.`, `d_interior.`, ...; the image channels `R`, `G`,
+/// `B` are skipped); with a `prefix`, exactly the names starting with it. Ordered by name, except that
+/// the colour suffixes come as `R`, `G`, `B` (EXR files store channels in byte order: `B`, `G`, `R`).
 pub fn select_channels(a: &Channels, b: &Channels, prefix: Option<&str>) -> Vec<String> {
-    a.iter()
+    let mut names: Vec<String> = a
+        .iter()
         .map(|(name, _)| name)
         .filter(|name| match prefix {
             Some(p) => name.starts_with(p),
@@ -150,7 +152,15 @@ pub fn select_channels(a: &Channels, b: &Channels, prefix: Option<&str>) -> Vec<
         })
         .filter(|name| b.iter().any(|(other, _)| other == *name))
         .cloned()
-        .collect()
+        .collect();
+    // "d.p.G" → ("d.p.", 1): colours of one quantity together, in R, G, B order.
+    let key = |name: &String| {
+        let (stem, last) = name.rsplit_once('.').unwrap_or(("", name.as_str()));
+        let colour = ["R", "G", "B"].iter().position(|c| *c == last);
+        (stem.to_string(), colour.unwrap_or(3), last.to_string())
+    };
+    names.sort_by_key(key);
+    names
 }
 
 /// Compares the selected channels (see [`select_channels`]) of two images of the same size, `b` being
@@ -313,11 +323,21 @@ mod tests {
 
     #[test]
     fn channel_selection() {
-        let a = channels(&["B", "G", "R", "d.p.R", "d_interior.p.R", "d.q.R"], 4);
-        let b = channels(&["B", "G", "R", "d.p.R", "d_interior.p.R"], 4);
-        assert_eq!(select_channels(&a, &b, None), ["d.p.R", "d_interior.p.R"]);
-        assert_eq!(select_channels(&a, &b, Some("d.")), ["d.p.R"]);
+        let a = channels(
+            &["B", "G", "R", "d.p.B", "d.p.R", "d_interior.p.R", "d.q.R"],
+            4,
+        );
+        let b = channels(&["B", "G", "R", "d.p.R", "d.p.B", "d_interior.p.R"], 4);
+        assert_eq!(
+            select_channels(&a, &b, None),
+            ["d.p.R", "d.p.B", "d_interior.p.R"]
+        );
+        assert_eq!(select_channels(&a, &b, Some("d.")), ["d.p.R", "d.p.B"]);
         assert_eq!(select_channels(&a, &b, Some("R")), ["R"]);
+        assert_eq!(
+            select_channels(&a, &b, Some("")),
+            ["R", "G", "B", "d.p.R", "d.p.B", "d_interior.p.R"]
+        );
         assert!(select_channels(&a, &b, Some("x")).is_empty());
     }
 
