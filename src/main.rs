@@ -449,6 +449,13 @@ fn diff(
         normalization,
     };
     let result = render_derivatives(&scene, params.len(), &options)?;
+    if result.interior.len() != params.len() {
+        bail!(
+            "internal error: {} derivative images for {} parameters",
+            result.interior.len(),
+            params.len()
+        );
+    }
     let image = &result.image;
 
     let mut channels = rgb_channels("", image);
