@@ -8,6 +8,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod compare;
 pub mod emitter;
 pub mod error;
 pub mod film;

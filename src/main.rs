@@ -6,8 +6,10 @@
 
 use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
-use implicit_psdr::integrator::{self, RenderOptions};
-use implicit_psdr::{film, scene, sdf};
+use implicit_psdr::film::{Image, colormap};
+use implicit_psdr::integrator::derivative::{DiffOptions, Normalization, render_derivatives};
+use implicit_psdr::integrator::{self, RenderOptions, fd};
+use implicit_psdr::{compare, film, scene, sdf};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -54,6 +56,101 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// List every differentiable parameter of a scene with its value, one `name value` per line.
+    Params {
+        /// The scene file.
+        scene: PathBuf,
+    },
+    /// Render the image and its derivatives with respect to scene parameters (forward mode) to an EXR
+    /// (`R`, `G`, `B`, and `d.P.R`, `d.P.G`, `d.P.B` per parameter P) and a PNG (the image beside one
+    /// colour-mapped panel per derivative).
+    Diff {
+        /// The scene file.
+        scene: PathBuf,
+        /// A parameter to differentiate with respect to (repeat for several; see `params`).
+        #[arg(long = "param", value_name = "P", required = true)]
+        params: Vec<String>,
+        /// Samples per pixel (default: the scene's `spp`).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        spp: Option<u32>,
+        /// Seed of the deterministic sampler.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Also write each term of the derivative (`d_interior.P.R|G|B`).
+        #[arg(long)]
+        terms: bool,
+        /// Pixel normalisation: `fixed` (the filter-weight sum is a constant) or `differentiable`.
+        #[arg(long, value_enum, default_value_t = NormalizationArg::Fixed)]
+        normalization: NormalizationArg,
+        /// Output EXR file.
+        #[arg(long, default_value = "diff.exr")]
+        out: PathBuf,
+        /// Output PNG file.
+        #[arg(long, default_value = "diff.png")]
+        png: PathBuf,
+    },
+    /// Central finite differences of the image with respect to one parameter, with common random numbers
+    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
+    Fd {
+        /// The scene file.
+        scene: PathBuf,
+        /// The parameter (see `params`).
+        #[arg(long = "param", value_name = "P")]
+        param: String,
+        /// Step (default: 0.01 · max(|P|, 1)).
+        #[arg(long, value_parser = positive_f32)]
+        h: Option<f32>,
+        /// Samples per pixel (default: the scene's `spp`).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        spp: Option<u32>,
+        /// Seed of the deterministic sampler.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Output EXR file.
+        #[arg(long, default_value = "fd.exr")]
+        out: PathBuf,
+        /// Output PNG file.
+        #[arg(long, default_value = "fd.png")]
+        png: PathBuf,
+    },
+    /// Compare the derivative channels of two EXR files (B is the reference): relative L2 error, raw and
+    /// after a 5x5 box blur, sums, sums of absolute values and correlation.
+    Compare {
+        /// The EXR file to check.
+        a: PathBuf,
+        /// The reference EXR file.
+        b: PathBuf,
+        /// Compare only the channels whose names start with PREFIX (default: every channel starting
+        /// with `d`).
+        #[arg(long, value_name = "PREFIX")]
+        channel: Option<String>,
+    },
+}
+
+/// `--normalization` values.
+#[derive(Copy, Clone, Debug, clap::ValueEnum)]
+enum NormalizationArg {
+    /// Pixel = mean of its samples; the filter-weight sum is treated as a constant.
+    Fixed,
+    /// Pixel = F / W with both sums differentiated.
+    Differentiable,
+}
+
+impl From<NormalizationArg> for Normalization {
+    fn from(n: NormalizationArg) -> Self {
+        match n {
+            NormalizationArg::Fixed => Normalization::Fixed,
+            NormalizationArg::Differentiable => Normalization::Differentiable,
+        }
+    }
+}
+
+/// A finite number > 0.
+fn positive_f32(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a finite number > 0, got {text:?}")),
+    }
 }
 
 fn main() -> ExitCode {
@@ -105,6 +202,36 @@ fn run(cli: Cli) -> Result<()> {
             res,
             out,
         } => bake(&scene, &shape, res as usize, &out),
+        Command::Params { scene } => params(&scene),
+        Command::Diff {
+            scene,
+            params,
+            spp,
+            seed,
+            terms,
+            normalization,
+            out,
+            png,
+        } => diff(
+            &scene,
+            &params,
+            spp,
+            seed,
+            terms,
+            normalization.into(),
+            &out,
+            &png,
+        ),
+        Command::Fd {
+            scene,
+            param,
+            h,
+            spp,
+            seed,
+            out,
+            png,
+        } => finite_difference(&scene, &param, h, spp, seed, &out, &png),
+        Command::Compare { a, b, channel } => compare_files(&a, &b, channel.as_deref()),
     }
 }
 
@@ -149,31 +276,56 @@ fn check_output(path: &Path, what: &str) -> Result<()> {
     Ok(())
 }
 
-fn render(scene_path: &Path, spp: Option<u32>, seed: u64, out: &Path, png: &Path) -> Result<()> {
+/// Checks both outputs of an EXR + PNG command before anything is rendered.
+fn check_outputs(out: &Path, png: &Path) -> Result<()> {
     check_output(out, "--out")?;
     check_output(png, "--png")?;
     if out == png {
         bail!("--out and --png name the same file {}", out.display());
     }
-    let scene = load_scene(scene_path)?;
-    let options = RenderOptions {
+    Ok(())
+}
+
+fn render_options(scene: &scene::Scene, spp: Option<u32>, seed: u64) -> RenderOptions {
+    RenderOptions {
         spp: spp.unwrap_or(scene.spp),
         seed,
         progress: std::io::stderr().is_terminal(),
-    };
-    let (image, stats) = integrator::render(&scene, &options);
+    }
+}
 
-    let channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"]
+/// The EXR channels `{prefix}R`, `{prefix}G`, `{prefix}B` of an image.
+fn rgb_channels(prefix: &str, image: &Image) -> film::Channels {
+    ["R", "G", "B"]
         .iter()
         .enumerate()
-        .map(|(c, name)| (name.to_string(), image.channel(c)))
-        .collect();
-    film::write_exr(out, image.width, image.height, &channels)?;
-    if let Err(e) = film::write_png(png, image.width, image.height, &image.rgb) {
-        // Keep the outputs all-or-nothing.
+        .map(|(c, name)| (format!("{prefix}{name}"), image.channel(c)))
+        .collect()
+}
+
+/// Writes the EXR (planes of `image`'s size), then the PNG `picture`; removes the EXR if the PNG fails,
+/// so the outputs are all-or-nothing.
+fn write_outputs(
+    out: &Path,
+    png: &Path,
+    image: &Image,
+    channels: &film::Channels,
+    picture: &Image,
+) -> Result<()> {
+    film::write_exr(out, image.width, image.height, channels)?;
+    if let Err(e) = film::write_png(png, picture.width, picture.height, &picture.rgb) {
         let _ = std::fs::remove_file(out);
         return Err(e.into());
     }
+    Ok(())
+}
+
+fn render(scene_path: &Path, spp: Option<u32>, seed: u64, out: &Path, png: &Path) -> Result<()> {
+    check_outputs(out, png)?;
+    let scene = load_scene(scene_path)?;
+    let options = render_options(&scene, spp, seed);
+    let (image, stats) = integrator::render(&scene, &options);
+    write_outputs(out, png, &image, &rgb_channels("", &image), &image)?;
 
     let rate = stats.samples as f64 / stats.seconds.max(1e-9);
     println!(
@@ -186,13 +338,16 @@ fn render(scene_path: &Path, spp: Option<u32>, seed: u64, out: &Path, png: &Path
         out.display(),
         png.display()
     );
-    if stats.exhausted_rays > 0 {
+    warn_exhausted(stats.exhausted_rays);
+    Ok(())
+}
+
+fn warn_exhausted(rays: u64) {
+    if rays > 0 {
         eprintln!(
-            "warning: {} rays ran out of sphere-tracing steps and were treated as misses",
-            stats.exhausted_rays
+            "warning: {rays} rays ran out of sphere-tracing steps and were treated as misses"
         );
     }
-    Ok(())
 }
 
 /// Relative padding of the baked box: the B-spline needs samples beyond the surface on every side.
@@ -234,5 +389,179 @@ fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
         bbox_max.y,
         bbox_max.z
     );
+    Ok(())
+}
+
+fn params(scene_path: &Path) -> Result<()> {
+    let scene = load_scene(scene_path)?;
+    let mut text = String::new();
+    for (name, value) in scene.parameters() {
+        text.push_str(&format!("{name} {value}\n"));
+    }
+    print!("{text}");
+    Ok(())
+}
+
+/// What `diff` says about the terms it computes, until the boundary terms exist.
+const INTERIOR_ONLY_NOTE: &str = "note: derivatives hold the interior term only; boundary (silhouette \
+     and shadow) terms are not computed yet";
+
+/// The PNG of a derivative command: the image beside one colour-mapped panel per derivative. Returns it
+/// with each panel's colour scale.
+fn derivative_picture(image: &Image, derivatives: &[&Image]) -> (Image, Vec<f32>) {
+    let mut panels = vec![image.clone()];
+    let mut scales = Vec::new();
+    for d in derivatives {
+        let (panel, scale) = colormap::derivative_panel(d);
+        panels.push(panel);
+        scales.push(scale);
+    }
+    (colormap::side_by_side(&panels), scales)
+}
+
+fn print_scale(param: &str, scale: f32) {
+    println!(
+        "d.{param}: PNG colour scale ±{scale:.4e} (blue −, white 0, red +; 99th percentile of |mean of R, G, B|)"
+    );
+}
+
+#[allow(clippy::too_many_arguments)]
+fn diff(
+    scene_path: &Path,
+    params: &[String],
+    spp: Option<u32>,
+    seed: u64,
+    terms: bool,
+    normalization: Normalization,
+    out: &Path,
+    png: &Path,
+) -> Result<()> {
+    check_outputs(out, png)?;
+    for (k, p) in params.iter().enumerate() {
+        if params[..k].contains(p) {
+            bail!("--param {p} given twice");
+        }
+    }
+    let mut scene = load_scene(scene_path)?;
+    scene.select_parameters(params)?;
+    let options = DiffOptions {
+        render: render_options(&scene, spp, seed),
+        normalization,
+    };
+    let result = render_derivatives(&scene, params.len(), &options)?;
+    if result.interior.len() != params.len() {
+        bail!(
+            "internal error: {} derivative images for {} parameters",
+            result.interior.len(),
+            params.len()
+        );
+    }
+    let image = &result.image;
+
+    let mut channels = rgb_channels("", image);
+    // Until the boundary terms exist, the derivative is its interior term.
+    for (p, d) in params.iter().zip(&result.interior) {
+        channels.extend(rgb_channels(&format!("d.{p}."), d));
+    }
+    if terms {
+        for (p, d) in params.iter().zip(&result.interior) {
+            channels.extend(rgb_channels(&format!("d_interior.{p}."), d));
+        }
+    }
+    let derivatives: Vec<&Image> = result.interior.iter().collect();
+    let (picture, scales) = derivative_picture(image, &derivatives);
+    write_outputs(out, png, image, &channels, &picture)?;
+
+    println!("{INTERIOR_ONLY_NOTE}");
+    println!(
+        "rendered {}x{} and {} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
+        image.width,
+        image.height,
+        params.len(),
+        if params.len() == 1 { "" } else { "s" },
+        options.render.spp,
+        result.stats.seconds,
+        out.display(),
+        png.display()
+    );
+    for (p, scale) in params.iter().zip(scales) {
+        print_scale(p, scale);
+    }
+    warn_exhausted(result.stats.exhausted_rays);
+    Ok(())
+}
+
+fn finite_difference(
+    scene_path: &Path,
+    param: &str,
+    h: Option<f32>,
+    spp: Option<u32>,
+    seed: u64,
+    out: &Path,
+    png: &Path,
+) -> Result<()> {
+    check_outputs(out, png)?;
+    let scene = load_scene(scene_path)?;
+    let value = fd::parameter_value(&scene, param)?;
+    let h = h.unwrap_or_else(|| fd::default_step(value));
+    let options = render_options(&scene, spp, seed);
+    let start = std::time::Instant::now();
+    // Validates the step and both values before rendering anything.
+    let derivative = fd::finite_difference(&scene, param, h, &options)?;
+    let (image, stats) = integrator::render(&scene, &options);
+    let seconds = start.elapsed().as_secs_f64();
+
+    let mut channels = rgb_channels("", &image);
+    channels.extend(rgb_channels(&format!("d.{param}."), &derivative));
+    let (picture, scales) = derivative_picture(&image, &[&derivative]);
+    write_outputs(out, png, &image, &channels, &picture)?;
+
+    println!(
+        "central differences of {param} = {value} with h = {h} (common random numbers): rendered \
+         {}x{} three times at {} spp in {seconds:.2} s; wrote {} and {}",
+        image.width,
+        image.height,
+        options.spp,
+        out.display(),
+        png.display()
+    );
+    print_scale(param, scales[0]);
+    warn_exhausted(stats.exhausted_rays);
+    Ok(())
+}
+
+fn compare_files(a: &Path, b: &Path, prefix: Option<&str>) -> Result<()> {
+    let rows = compare::compare_files(a, b, prefix)?;
+    let width = rows
+        .iter()
+        .map(|r| r.name.len())
+        .max()
+        .unwrap_or(0)
+        .max("channel".len());
+    println!(
+        "A = {}, B = {} (the reference): rel.err = |A - B| / |B| (L2), blurred after a 5x5 box blur",
+        a.display(),
+        b.display()
+    );
+    println!(
+        "{:<width$}  {:>10}  {:>12}  {:>11}  {:>11}  {:>11}  {:>11}  {:>8}",
+        "channel", "rel.err", "rel.err.blur", "sum A", "sum B", "sum |A|", "sum |B|", "corr"
+    );
+    for r in &rows {
+        let correlation = r
+            .correlation
+            .map_or_else(|| "n/a".to_string(), |c| format!("{c:.5}"));
+        println!(
+            "{:<width$}  {:>10.3e}  {:>12.3e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>8}",
+            r.name,
+            r.relative_l2,
+            r.relative_l2_blurred,
+            r.sum_a,
+            r.sum_b,
+            r.abs_sum_a,
+            r.abs_sum_b,
+            correlation
+        );
+    }
     Ok(())
 }

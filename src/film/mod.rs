@@ -1,5 +1,6 @@
 //! Pixel filters, images and their output (EXR, PNG).
 
+pub mod colormap;
 mod filter;
 mod output;
 

@@ -49,6 +49,8 @@ const BSDF_TYPES: &[&str] = &["diffuse"];
 const EMITTER_TYPES: &[&str] = &["rectangle", "sphere", "constant"];
 const INTEGRATOR_TYPES: &[&str] = &["direct", "path"];
 const FILTERS: &[&str] = &["tent", "gaussian", "box"];
+/// Prefix of the camera's parameter names, so no shape, emitter or node may use it.
+const RESERVED_NAME: &str = "camera";
 
 /// Reads and validates a scene file. Relative paths inside it (grids) resolve against its folder.
 pub fn load(path: &Path) -> Result<Scene> {
@@ -148,16 +150,21 @@ struct ParsedScene {
     camera: Camera,
     integrator: IntegratorKind,
     spp: u32,
-    shapes: Vec<(String, Sdf, Bsdf)>,
+    shapes: Vec<ParsedShape>,
     emitters: Vec<NamedEmitter>,
 }
+
+/// A validated shape: name, SDF, material and rigid translation.
+type ParsedShape = (String, Sdf, Bsdf, Vec3);
 
 impl ParsedScene {
     fn build(self) -> Scene {
         let shapes = self
             .shapes
             .into_iter()
-            .map(|(name, sdf, bsdf)| Shape::new(name, sdf, bsdf))
+            .map(|(name, sdf, bsdf, translate)| {
+                Shape::translated(name, sdf, bsdf, translate.into())
+            })
             .collect();
         Scene::new(
             self.camera,
@@ -436,6 +443,14 @@ impl Context<'_> {
                 ),
             ));
         }
+        if name == RESERVED_NAME {
+            return Err(Error::field(
+                path,
+                format!(
+                    "the name {name:?} is reserved for the camera's parameters ({name}.origin.x, ...)"
+                ),
+            ));
+        }
         if let Some(first) = self.names.get(name) {
             return Err(Error::field(
                 path,
@@ -498,13 +513,14 @@ impl Context<'_> {
         })
     }
 
-    fn shape(&mut self, v: &Value, path: String) -> Result<(String, Sdf, Bsdf)> {
-        let o = Obj::new(v, path, &["name", "sdf", "bsdf"])?;
+    fn shape(&mut self, v: &Value, path: String) -> Result<ParsedShape> {
+        let o = Obj::new(v, path, &["name", "sdf", "bsdf", "translate"])?;
         let name = o.string("name")?;
         self.name(name, o.at("name"))?;
         let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?;
         let bsdf = bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
-        Ok((name.to_string(), sdf, bsdf))
+        let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
+        Ok((name.to_string(), sdf, bsdf, translate))
     }
 
     fn sdf(&mut self, v: &Value, path: &str) -> Result<Sdf> {
@@ -525,10 +541,20 @@ impl Context<'_> {
         };
         let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
         let o = Obj::new(v, path.to_string(), &allowed)?;
-        if let Some(name) = o.opt_string("name")? {
-            // Node names are only checked for now; a later parameter registry will key on them.
+        let name = o.opt_string("name")?;
+        if let Some(name) = name {
             self.name(name, o.at("name"))?;
         }
+        let node = self.sdf_node(ty, &o)?;
+        // The name is kept (as a wrapper that delegates everything) because parameter names key on it.
+        Ok(match name {
+            Some(name) => Sdf::named(name, node),
+            None => node,
+        })
+    }
+
+    /// The node of type `ty` read from `o` (its keys already checked), without its name.
+    fn sdf_node(&mut self, ty: &str, o: &Obj) -> Result<Sdf> {
         let p3 = |x: Vec3| Param3::from(x);
         Ok(match ty {
             "sphere" => Sdf::Sphere {
@@ -583,18 +609,18 @@ impl Context<'_> {
                 normal: o.direction("normal")?,
                 offset: o.f32("offset")?.into(),
             },
-            "union" => Sdf::Union(self.children(&o)?),
-            "intersection" => Sdf::Intersection(self.children(&o)?),
-            "difference" => Sdf::Difference(self.children(&o)?),
+            "union" => Sdf::Union(self.children(o)?),
+            "intersection" => Sdf::Intersection(self.children(o)?),
+            "difference" => Sdf::Difference(self.children(o)?),
             "smooth_union" => {
                 let k = positive(o.f32("k")?, &o.at("k"))?;
                 Sdf::SmoothUnion {
-                    children: self.children(&o)?,
+                    children: self.children(o)?,
                     k: k.into(),
                 }
             }
-            "transform" => self.transform(&o)?,
-            "grid" => self.grid(&o)?,
+            "transform" => self.transform(o)?,
+            "grid" => self.grid(o)?,
             _ => unreachable!("tag checked against SDF_TYPES"),
         })
     }

@@ -1,27 +1,618 @@
 //! The parameter registry: every numeric scene value has a name `<name>.<field>` (`.x/.y/.z` for vectors,
 //! `.r/.g/.b` for colours), can be listed, selected for differentiation (given a derivative slot) and set
 //! (for finite differences).
+//!
+//! The naming scheme and the order are documented on [`Scene::parameters`].
 
-use super::Scene;
-use crate::error::Result;
+use super::{NamedEmitter, Scene, Shape};
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::emitter::Emitter;
+use crate::error::{Error, Result};
+use crate::scalar::{Param, Param3};
+use crate::sdf::Sdf;
+
+/// Component suffixes of a point or vector.
+const XYZ: [&str; 3] = ["x", "y", "z"];
+/// Component suffixes of a colour.
+const RGB: [&str; 3] = ["r", "g", "b"];
+
+/// How many near matches an unknown-name error lists.
+const MAX_SUGGESTIONS: usize = 3;
+
+/// The prefix of the unnamed root node of shape `shape` (see [`Scene::parameters`]).
+fn root_prefix(shape: &str, sdf: &Sdf) -> String {
+    match sdf {
+        Sdf::Transform { .. } => format!("{shape}.sdf"),
+        _ => shape.to_string(),
+    }
+}
+
+/// Generates a parameter visitor over the sdf tree, the camera, a shape, an emitter and a whole scene,
+/// for shared (`visit_*`) or mutable (`visit_*_mut`) access: the two are the same walk, and writing it
+/// once keeps the names of [`Scene::parameters`] and [`Scene::with_parameter`] identical by construction.
+macro_rules! visitors {
+    ($sdf:ident, $camera:ident, $shape:ident, $emitter:ident, $scene:ident $(, $m:tt)?) => {
+        /// Visits one vector or colour `p` as `<prefix>.<field>.<component>`.
+        fn vec3(
+            prefix: &str,
+            field: &str,
+            comps: [&str; 3],
+            p: &$($m)? Param3,
+            f: &mut dyn FnMut(&str, &$($m)? Param),
+        ) {
+            for (i, c) in comps.iter().enumerate() {
+                f(&format!("{prefix}.{field}.{c}"), &$($m)? p.c[i]);
+            }
+        }
+
+        /// Visits one number as `<prefix>.<field>`.
+        fn scalar(prefix: &str, field: &str, p: &$($m)? Param, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            f(&format!("{prefix}.{field}"), p);
+        }
+
+        /// Visits every parameter of the tree under `sdf`, whose node prefix is `prefix` (ignored if the
+        /// node is named).
+        pub(super) fn $sdf(sdf: &$($m)? Sdf, prefix: &str, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            match sdf {
+                Sdf::Sphere { center, radius } => {
+                    vec3(prefix, "center", XYZ, center, f);
+                    scalar(prefix, "radius", radius, f);
+                }
+                Sdf::Box {
+                    center,
+                    half_size,
+                    rounding,
+                } => {
+                    vec3(prefix, "center", XYZ, center, f);
+                    vec3(prefix, "half_size", XYZ, half_size, f);
+                    scalar(prefix, "rounding", rounding, f);
+                }
+                Sdf::Torus {
+                    center,
+                    major_radius,
+                    minor_radius,
+                    ..
+                } => {
+                    vec3(prefix, "center", XYZ, center, f);
+                    scalar(prefix, "major_radius", major_radius, f);
+                    scalar(prefix, "minor_radius", minor_radius, f);
+                }
+                Sdf::Cylinder {
+                    center,
+                    radius,
+                    half_height,
+                    rounding,
+                    ..
+                } => {
+                    vec3(prefix, "center", XYZ, center, f);
+                    scalar(prefix, "radius", radius, f);
+                    scalar(prefix, "half_height", half_height, f);
+                    scalar(prefix, "rounding", rounding, f);
+                }
+                Sdf::Capsule { a, b, radius } => {
+                    vec3(prefix, "a", XYZ, a, f);
+                    vec3(prefix, "b", XYZ, b, f);
+                    scalar(prefix, "radius", radius, f);
+                }
+                Sdf::Plane { offset, .. } => scalar(prefix, "offset", offset, f),
+                Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
+                    for i in 0..children.len() {
+                        $sdf(&$($m)? children[i], &format!("{prefix}.children.{i}"), f);
+                    }
+                }
+                Sdf::SmoothUnion { children, k } => {
+                    for i in 0..children.len() {
+                        $sdf(&$($m)? children[i], &format!("{prefix}.children.{i}"), f);
+                    }
+                    scalar(prefix, "k", k, f);
+                }
+                Sdf::Transform {
+                    translate,
+                    angle,
+                    scale,
+                    child,
+                    ..
+                } => {
+                    vec3(prefix, "translate", XYZ, translate, f);
+                    scalar(prefix, "angle", angle, f);
+                    scalar(prefix, "scale", scale, f);
+                    $sdf(child, &format!("{prefix}.child"), f);
+                }
+                Sdf::Grid { .. } => {}
+                Sdf::Named { name, child } => $sdf(child, name, f),
+            }
+        }
+
+        /// Visits the camera's parameters (`camera.*`).
+        pub(super) fn $camera(camera: &$($m)? Camera, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            vec3("camera", "origin", XYZ, &$($m)? camera.origin, f);
+            vec3("camera", "target", XYZ, &$($m)? camera.target, f);
+            vec3("camera", "up", XYZ, &$($m)? camera.up, f);
+            scalar("camera", "fov_y", &$($m)? camera.fov_y, f);
+        }
+
+        /// Visits a shape's parameters: translation, sdf tree, BSDF.
+        pub(super) fn $shape(shape: &$($m)? Shape, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            let name = &shape.name;
+            vec3(name, "translate", XYZ, &$($m)? shape.translate, f);
+            let root = root_prefix(name, &shape.sdf);
+            $sdf(&$($m)? shape.sdf, &root, f);
+            match &$($m)? shape.bsdf {
+                Bsdf::Diffuse { albedo } => vec3(name, "albedo", RGB, albedo, f),
+            }
+        }
+
+        /// Visits an emitter's parameters.
+        pub(super) fn $emitter(e: &$($m)? NamedEmitter, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            let name = &e.name;
+            match &$($m)? e.emitter {
+                Emitter::Rectangle {
+                    center,
+                    size,
+                    radiance,
+                    ..
+                } => {
+                    vec3(name, "center", XYZ, center, f);
+                    for (i, c) in ["x", "y"].iter().enumerate() {
+                        f(&format!("{name}.size.{c}"), &$($m)? size[i]);
+                    }
+                    vec3(name, "radiance", RGB, radiance, f);
+                }
+                Emitter::Sphere {
+                    center,
+                    radius,
+                    radiance,
+                } => {
+                    vec3(name, "center", XYZ, center, f);
+                    scalar(name, "radius", radius, f);
+                    vec3(name, "radiance", RGB, radiance, f);
+                }
+                Emitter::Constant { radiance } => vec3(name, "radiance", RGB, radiance, f),
+            }
+        }
+
+        /// Visits every parameter of the scene in the order of [`Scene::parameters`].
+        pub(super) fn $scene(scene: &$($m)? Scene, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            $camera(&$($m)? scene.camera, f);
+            for s in &$($m)? scene.shapes {
+                $shape(s, f);
+            }
+            for e in &$($m)? scene.emitters {
+                $emitter(e, f);
+            }
+        }
+    };
+}
+
+/// Shared-access visitors.
+mod shared {
+    use super::*;
+    visitors!(sdf, camera, shape, emitter, scene);
+}
+
+/// Mutable-access visitors.
+mod exclusive {
+    use super::*;
+    visitors!(sdf, camera, shape, emitter, scene, mut);
+}
+
+impl Sdf {
+    /// Calls `f` with the full name and value of every parameter in the tree under this node, whose
+    /// prefix is `prefix` (a named node uses its own name instead; see [`Scene::parameters`] for
+    /// the scheme).
+    pub fn visit_params(&self, prefix: &str, f: &mut dyn FnMut(&str, &Param)) {
+        shared::sdf(self, prefix, f);
+    }
+
+    /// [`Sdf::visit_params`] with mutable access (to set values or slots). Derived data (a shape's
+    /// bounds) is not updated.
+    pub fn visit_params_mut(&mut self, prefix: &str, f: &mut dyn FnMut(&str, &mut Param)) {
+        exclusive::sdf(self, prefix, f);
+    }
+}
 
 impl Scene {
+    /// Calls `f` with the full name and value of every parameter (see [`Scene::parameters`] for the
+    /// names), in the order of [`Scene::parameters`].
+    pub fn visit_params(&self, f: &mut dyn FnMut(&str, &Param)) {
+        shared::scene(self, f);
+    }
+
+    /// [`Scene::visit_params`] with mutable access. Changing a value this way does not update derived
+    /// data (bounds, Lipschitz bounds, tolerance): use [`Scene::with_parameter`] for that. Changing slots
+    /// is what [`Scene::select_parameters`] does.
+    pub fn visit_params_mut(&mut self, f: &mut dyn FnMut(&str, &mut Param)) {
+        exclusive::scene(self, f);
+    }
+
     /// Every parameter with its current value, in a stable order (camera, shapes, emitters).
+    ///
+    /// ## Names
+    ///
+    /// Names use only ASCII letters, digits, `_`, `-` and `.` (no brackets or spaces, so they need no quoting
+    /// in a shell). Object names (shapes, emitters, named sdf nodes) share one namespace and contain no dot,
+    /// so the names below are unique.
+    ///
+    /// - Camera: `camera.origin.x|y|z`, `camera.target.x|y|z`, `camera.up.x|y|z`, `camera.fov_y` (degrees;
+    ///   `camera` is a reserved object name). `up` is kept as given (the frame is built from it by
+    ///   Gram–Schmidt), so its components are parameters although only its direction matters.
+    /// - Shape `s`: `s.translate.x|y|z` (the rigid translation of the whole shape, grids included) and
+    ///   `s.albedo.r|g|b` (its diffuse BSDF).
+    /// - The shape's sdf tree. Every node has a *prefix* and its fields are `<prefix>.<field>`:
+    ///   - a node with a `name` in the scene file has that name as its prefix (`{"type": "torus", "name":
+    ///     "ring", ...}` gives `ring.major_radius`), wherever it sits in the tree;
+    ///   - the unnamed root node has the shape's name as its prefix (`ball.radius`, `ball.center.x`), except
+    ///     an unnamed root *transform*, whose `translate` would collide with the shape's own: its prefix is
+    ///     `s.sdf` (`ring.sdf.translate.x`, `ring.sdf.angle`);
+    ///   - an unnamed child has its parent's prefix followed by its place, as in the JSON path with the
+    ///     index written as a component: `<parent>.children.<i>` for unions, intersections, differences and
+    ///     smooth unions (`blob.children.1.radius`), `<parent>.child` for a transform
+    ///     (`ring.sdf.child.major_radius`).
+    /// - Node fields: sphere `center`, `radius`; box `center`, `half_size`, `rounding`; torus `center`,
+    ///   `major_radius`, `minor_radius`; cylinder `center`, `radius`, `half_height`, `rounding`; capsule `a`,
+    ///   `b`, `radius`; plane `offset`; smooth union `k`; transform `translate`, `angle` (degrees, present
+    ///   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
+    ///   intersection and difference have no fields. Grid samples are not parameters (a grid moves with its
+    ///   shape's `translate` or an enclosing transform).
+    /// - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
+    ///   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
+    ///   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`
+    ///   (`sky.radiance.g`).
+    ///
+    /// Unit directions (a torus's or cylinder's `axis`, a plane's or rectangle's `normal`, a rectangle's `u`,
+    /// a transform's rotation `axis`) are not parameters: they are normalised on input, so a change of one
+    /// component is not a change of the surface along that component alone (its derivative would need the
+    /// normalisation's projection, and a finite difference would leave the unit sphere). The grid's box is not
+    /// one either (the samples are data). Image size, filter, spp and integrator settings are not numbers
+    /// of the scene's geometry or light.
+    ///
+    /// ## Order
+    ///
+    /// Camera, then shapes (translate, sdf tree depth-first in file order, albedo),
+    /// then emitters, each in file order: stable across runs and file round trips.
     pub fn parameters(&self) -> Vec<(String, f32)> {
-        todo!("params: parameters")
+        let mut out = Vec::new();
+        self.visit_params(&mut |name, p| out.push((name.to_string(), p.value)));
+        out
+    }
+
+    /// The current value of parameter `name`; an unknown name is an error listing near matches.
+    pub fn parameter(&self, name: &str) -> Result<f32> {
+        let mut found = None;
+        self.visit_params(&mut |n, p| {
+            if n == name {
+                found = Some(p.value);
+            }
+        });
+        found.ok_or_else(|| self.unknown(name))
     }
 
     /// Differentiates with respect to `names`: `names[k]` gets derivative slot `k`, every other parameter
-    /// none. An unknown name is an error listing near matches.
+    /// none. An unknown name is an error listing near matches, and so is a name given twice; on error the
+    /// scene is unchanged.
     pub fn select_parameters(&mut self, names: &[String]) -> Result<()> {
-        let _ = names;
-        todo!("params: select_parameters")
+        if names.len() > usize::from(u16::MAX) + 1 {
+            return Err(Error::field(
+                "--param",
+                format!(
+                    "at most {} parameters at once, got {}",
+                    usize::from(u16::MAX) + 1,
+                    names.len()
+                ),
+            ));
+        }
+        for (k, name) in names.iter().enumerate() {
+            if names[..k].contains(name) {
+                return Err(Error::field(
+                    "--param",
+                    format!("parameter {name:?} is given twice"),
+                ));
+            }
+        }
+        let mut seen = vec![false; names.len()];
+        self.visit_params(&mut |n, _| {
+            if let Some(k) = names.iter().position(|x| x == n) {
+                seen[k] = true;
+            }
+        });
+        if let Some(k) = seen.iter().position(|s| !s) {
+            return Err(self.unknown(&names[k]));
+        }
+        self.visit_params_mut(&mut |n, p| {
+            p.slot = names.iter().position(|x| x == n).map(|k| k as u16);
+        });
+        Ok(())
     }
 
     /// A copy of the scene with parameter `name` set to `value`, its derived data (bounds, Lipschitz
     /// bounds, tracer tolerance) recomputed. Errors: unknown name; a value the field does not accept.
+    ///
+    /// The value must be finite and satisfy the scene file's rules for its field (a radius `> 0`, a
+    /// rounding in `[0, min half size]`, a torus's major radius above its minor one, an albedo in `[0, 1]`,
+    /// a radiance `>= 0`, a valid camera, ...). Only rules that the change breaks are reported: a scene
+    /// built in code with some other field out of range can still be changed elsewhere. Slots are kept.
+    /// The tracer settings other than the tolerance `eps` (which follows the scene's scale as in
+    /// [`Scene::new`]) are kept.
     pub fn with_parameter(&self, name: &str, value: f32) -> Result<Scene> {
-        let _ = (name, value);
-        todo!("params: with_parameter")
+        if !value.is_finite() {
+            return Err(Error::field(
+                name,
+                format!("must be a finite number, got {value}"),
+            ));
+        }
+        let mut copy = self.clone();
+        let mut found = false;
+        copy.visit_params_mut(&mut |n, p| {
+            if n == name {
+                p.value = value;
+                found = true;
+            }
+        });
+        if !found {
+            return Err(self.unknown(name));
+        }
+        // Compared by message (field and value), so a rule broken before and after is not reported.
+        let before: Vec<String> = self.violations().iter().map(Error::to_string).collect();
+        if let Some(v) = copy
+            .violations()
+            .into_iter()
+            .find(|v| !before.contains(&v.to_string()))
+        {
+            return Err(v);
+        }
+        let shapes = copy
+            .shapes
+            .into_iter()
+            .map(|s| Shape::translated(s.name, s.sdf, s.bsdf, s.translate))
+            .collect();
+        let mut scene = Scene::new(
+            copy.camera,
+            copy.integrator,
+            copy.spp,
+            shapes,
+            copy.emitters,
+        );
+        scene.trace = crate::trace::TraceSettings {
+            eps: scene.trace.eps,
+            ..self.trace
+        };
+        Ok(scene)
+    }
+
+    /// The error for an unknown parameter name: near matches by edit distance, or else names of the same
+    /// object, and a pointer to the `params` command.
+    fn unknown(&self, name: &str) -> Error {
+        let names: Vec<String> = self.parameters().into_iter().map(|(n, _)| n).collect();
+        let near = near_matches(name, &names);
+        let hint = "run `implicit-psdr params SCENE.json` to list them";
+        let message = if near.is_empty() {
+            format!("no parameter {name:?} ({hint})")
+        } else {
+            format!(
+                "no parameter {name:?}; did you mean {}? ({hint})",
+                near.join(", ")
+            )
+        };
+        Error::field("--param", message)
+    }
+
+    /// Every broken field rule of the scene file, as errors naming the parameter (see
+    /// [`Scene::with_parameter`]).
+    fn violations(&self) -> Vec<Error> {
+        let mut out = Vec::new();
+        if let Err(e) = self.camera.validate() {
+            out.push(match e {
+                Error::Field { field, message } => Error::field(format!("camera.{field}"), message),
+                e => e,
+            });
+        }
+        for s in &self.shapes {
+            sdf_violations(&s.sdf, &root_prefix(&s.name, &s.sdf), &mut out);
+            match &s.bsdf {
+                Bsdf::Diffuse { albedo } => {
+                    for (i, c) in RGB.iter().enumerate() {
+                        let v = albedo.c[i].value;
+                        if !(0.0..=1.0).contains(&v) {
+                            out.push(Error::field(
+                                format!("{}.albedo.{c}", s.name),
+                                format!("must be in [0, 1], got {v}"),
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        for e in &self.emitters {
+            let name = &e.name;
+            let mut positive = |field: String, v: f32| {
+                if !is_positive(v) {
+                    out.push(Error::field(field, format!("must be > 0, got {v}")));
+                }
+            };
+            let radiance = match &e.emitter {
+                Emitter::Rectangle { size, radiance, .. } => {
+                    positive(format!("{name}.size.x"), size[0].value);
+                    positive(format!("{name}.size.y"), size[1].value);
+                    radiance
+                }
+                Emitter::Sphere {
+                    radius, radiance, ..
+                } => {
+                    positive(format!("{name}.radius"), radius.value);
+                    radiance
+                }
+                Emitter::Constant { radiance } => radiance,
+            };
+            for (i, c) in RGB.iter().enumerate() {
+                let v = radiance.c[i].value;
+                if !(0.0..).contains(&v) {
+                    out.push(Error::field(
+                        format!("{name}.radiance.{c}"),
+                        format!("must be >= 0, got {v}"),
+                    ));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The scene file's rules for the nodes of the tree under `sdf` (prefix `prefix`), as in the parser.
+fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
+    let positive = |field: &str, v: f32, out: &mut Vec<Error>| {
+        if !is_positive(v) {
+            out.push(Error::field(
+                format!("{prefix}.{field}"),
+                format!("must be > 0, got {v}"),
+            ));
+        }
+    };
+    let in_range = |field: &str, v: f32, hi: f32, out: &mut Vec<Error>| {
+        if !(0.0..=hi).contains(&v) {
+            out.push(Error::field(
+                format!("{prefix}.{field}"),
+                format!("must be in [0, {hi}], got {v}"),
+            ));
+        }
+    };
+    match sdf {
+        Sdf::Sphere { radius, .. } | Sdf::Capsule { radius, .. } => {
+            positive("radius", radius.value, out)
+        }
+        Sdf::Box {
+            half_size,
+            rounding,
+            ..
+        } => {
+            for (i, c) in XYZ.iter().enumerate() {
+                positive(&format!("half_size.{c}"), half_size.c[i].value, out);
+            }
+            let min_half = half_size.value().min_element().max(0.0);
+            in_range("rounding", rounding.value, min_half, out);
+        }
+        Sdf::Torus {
+            major_radius,
+            minor_radius,
+            ..
+        } => {
+            let (major, minor) = (major_radius.value, minor_radius.value);
+            positive("minor_radius", minor, out);
+            if !is_positive(major - minor) {
+                out.push(Error::field(
+                    format!("{prefix}.major_radius"),
+                    format!("must be > minor_radius ({minor}), got {major}"),
+                ));
+            }
+        }
+        Sdf::Cylinder {
+            radius,
+            half_height,
+            rounding,
+            ..
+        } => {
+            positive("radius", radius.value, out);
+            positive("half_height", half_height.value, out);
+            let hi = radius.value.min(half_height.value).max(0.0);
+            in_range("rounding", rounding.value, hi, out);
+        }
+        Sdf::Plane { .. } | Sdf::Grid { .. } => {}
+        Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
+            for (i, c) in children.iter().enumerate() {
+                sdf_violations(c, &format!("{prefix}.children.{i}"), out);
+            }
+        }
+        Sdf::SmoothUnion { children, k } => {
+            for (i, c) in children.iter().enumerate() {
+                sdf_violations(c, &format!("{prefix}.children.{i}"), out);
+            }
+            positive("k", k.value, out);
+        }
+        Sdf::Transform { scale, child, .. } => {
+            positive("scale", scale.value, out);
+            sdf_violations(child, &format!("{prefix}.child"), out);
+        }
+        Sdf::Named { name, child } => sdf_violations(child, name, out),
+    }
+}
+
+/// `v > 0`, false for NaN (the rules below must catch NaN, so they test what is allowed).
+fn is_positive(v: f32) -> bool {
+    v > 0.0
+}
+
+/// Up to [`MAX_SUGGESTIONS`] names close to `name`: by edit distance (at most a third of the name's
+/// length, and at least 2), nearest first; failing that, names of the same object (`ball.` for
+/// `ball.radios`).
+fn near_matches(name: &str, names: &[String]) -> Vec<String> {
+    let limit = (name.chars().count() / 3).max(2);
+    let mut scored: Vec<(usize, &String)> = names
+        .iter()
+        .map(|n| (edit_distance(name, n), n))
+        .filter(|&(d, _)| d <= limit)
+        .collect();
+    // Stable: equal distances keep the registry order.
+    scored.sort_by_key(|&(d, _)| d);
+    let mut out: Vec<String> = scored
+        .into_iter()
+        .take(MAX_SUGGESTIONS)
+        .map(|(_, n)| n.clone())
+        .collect();
+    if out.is_empty()
+        && let Some((object, _)) = name.split_once('.')
+    {
+        let prefix = format!("{object}.");
+        out = names
+            .iter()
+            .filter(|n| n.starts_with(&prefix))
+            .take(MAX_SUGGESTIONS)
+            .cloned()
+            .collect();
+    }
+    out
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions) between `a` and `b`, by characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diag + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diag = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distance_counts_edits() {
+        assert_eq!(edit_distance("ball.radus", "ball.radius"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("same", "same"), 0);
+    }
+
+    #[test]
+    fn near_matches_prefer_small_distances_then_fall_back_to_the_object() {
+        let names: Vec<String> = ["ball.radius", "ball.center.x", "light.center.y"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        assert_eq!(near_matches("ball.radus", &names), vec!["ball.radius"]);
+        assert_eq!(
+            near_matches("ball.whatever_it_is", &names),
+            vec!["ball.radius", "ball.center.x"]
+        );
+        assert!(near_matches("zzz", &names).is_empty());
     }
 }

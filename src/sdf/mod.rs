@@ -9,7 +9,8 @@
 //!
 //! Layout: exact-distance primitives (`primitives.rs`), hard CSG and the cubic smooth union (`csg.rs`),
 //! similarity transforms (`transform.rs`), B-spline grids (`grid.rs`), `.npy` I/O (`npy.rs`) and baking
-//! any node onto a grid (`bake.rs`).
+//! any node onto a grid (`bake.rs`). [`Sdf::Named`] only carries a node's name from the scene file (for
+//! parameter names) and delegates everything to its child.
 //!
 //! Smoothness, which the curvature and the boundary terms care about: sphere, torus, capsule and plane
 //! are smooth (C∞) off their medial axes; rounded boxes and cylinders are C1 (the curvature jumps where a
@@ -144,6 +145,15 @@ pub enum Sdf {
         /// Upper corner of the grid box (last sample).
         bbox_max: glam::Vec3,
     },
+    /// A node given a `name` in the scene file, so that its parameters are `<name>.<field>` (see
+    /// [`crate::scene::Scene::parameters`]). It is the child in every respect: evaluation, gradient,
+    /// bounds and Lipschitz bound all delegate.
+    Named {
+        /// The node's unique name (ASCII letters, digits, `_`, `-`).
+        name: String,
+        /// The named node.
+        child: Box<Sdf>,
+    },
 }
 
 impl Sdf {
@@ -189,6 +199,7 @@ impl Sdf {
                 bbox_min,
                 bbox_max,
             } => grid::eval(data, *bbox_min, *bbox_max, p),
+            Sdf::Named { child, .. } => child.eval(p),
         }
     }
 
@@ -212,6 +223,8 @@ impl Sdf {
                 half_size,
                 rounding,
             } => box_gradient(p - center.value(), half_size.value(), rounding.value),
+            // The child's fast path, if it has one.
+            Sdf::Named { child, .. } => child.gradient(p),
             _ => self.ad_gradient(p),
         }
     }
@@ -315,6 +328,7 @@ impl Sdf {
                 bbox_min,
                 bbox_max,
             } => grid::bounds(data, *bbox_min, *bbox_max),
+            Sdf::Named { child, .. } => child.bounds(),
         }
     }
 
@@ -336,6 +350,7 @@ impl Sdf {
                 bbox_min,
                 bbox_max,
             } => grid::lipschitz(data, *bbox_min, *bbox_max),
+            Sdf::Named { child, .. } => child.lipschitz(),
             _ => 1.0,
         }
     }
@@ -462,6 +477,21 @@ impl Sdf {
             angle: angle_deg.into(),
             scale: scale.into(),
             child: Box::new(child),
+        }
+    }
+    /// `child` under a name (see [`Sdf::Named`]); the name is not checked here (the scene parser checks
+    /// names).
+    pub fn named(name: impl Into<String>, child: Sdf) -> Self {
+        Sdf::Named {
+            name: name.into(),
+            child: Box::new(child),
+        }
+    }
+    /// The node under any [`Sdf::Named`] wrappers: what to match on when the name does not matter.
+    pub fn unnamed(&self) -> &Sdf {
+        match self {
+            Sdf::Named { child, .. } => child.unnamed(),
+            other => other,
         }
     }
     /// A grid node over `[bbox_min, bbox_max]`, after checking the data ([`GridData::validate`]) and that

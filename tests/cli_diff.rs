@@ -1,0 +1,392 @@
+//! The derivative commands of the tool: `params`, `diff`, `fd` and `compare` write exactly the channels
+//! they promise, agree with each other on a linear parameter, and fail cleanly (exit code 2, one line on
+//! stderr, no output file) on bad inputs.
+
+use implicit_psdr::film;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_implicit-psdr");
+
+/// A fresh, empty working folder for one test.
+fn workdir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("psdr-cli-diff-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run implicit-psdr")
+}
+
+#[track_caller]
+fn assert_success(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[track_caller]
+fn assert_failure(out: &Output, expected: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.starts_with("error: "), "stderr: {stderr:?}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr:?}");
+    assert!(stderr.contains(expected), "{stderr:?} lacks {expected:?}");
+    assert!(!stderr.contains("panicked"), "stderr: {stderr:?}");
+}
+
+/// Files in `dir` other than the inputs named, sorted.
+fn outputs(dir: &Path, inputs: &[&str]) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !inputs.contains(&n.as_str()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The default scene (`scenes/sphere_floor.json`) at 16×16 pixels, 4 spp, with `edit` applied, written
+/// to `dir/scene.json`.
+fn write_scene(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["camera"]["width"] = 16.into();
+    v["camera"]["height"] = 16.into();
+    v["spp"] = 4.into();
+    edit(&mut v);
+    std::fs::write(dir.join("scene.json"), v.to_string()).unwrap();
+}
+
+/// The sorted channel names of an EXR file, and its size.
+fn exr_channels(path: &Path) -> (u32, u32, Vec<String>) {
+    let (w, h, channels) = film::read_exr(path).unwrap();
+    let mut names: Vec<String> = channels.into_iter().map(|(n, _)| n).collect();
+    names.sort();
+    (w, h, names)
+}
+
+/// Width and height of a PNG file, from its IHDR chunk.
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+/// `prefix` followed by `R`, `G`, `B`.
+fn rgb(prefix: &str) -> Vec<String> {
+    ["R", "G", "B"]
+        .iter()
+        .map(|c| format!("{prefix}{c}"))
+        .collect()
+}
+
+fn sorted(mut v: Vec<String>) -> Vec<String> {
+    v.sort();
+    v
+}
+
+/// The relative L2 error `compare` prints for `channel` (second column of its row).
+fn printed_error(stdout: &str, channel: &str) -> f64 {
+    let row = stdout
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some(channel))
+        .unwrap_or_else(|| panic!("no row for {channel} in {stdout}"));
+    row.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+/// Writes an EXR of `width × height` with the named channels, each a deterministic ramp.
+fn write_exr(path: &Path, width: u32, height: u32, names: &[&str]) {
+    let n = (width * height) as usize;
+    let channels: film::Channels = names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let values = (0..n).map(|i| (i + k) as f32 * 0.1 - 1.0).collect();
+            (name.to_string(), values)
+        })
+        .collect();
+    film::write_exr(path, width, height, &channels).unwrap();
+}
+
+#[test]
+#[ignore = "needs Scene::parameters (params branch)"]
+fn params_lists_the_default_scene() {
+    let dir = workdir("params");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
+    let stdout = assert_success(&run(&dir, &["params", scenes.to_str().unwrap()]));
+    let lines: Vec<&str> = stdout.lines().collect();
+    for expected in [
+        "ball.radius 1",
+        "ball.albedo.r 0.8",
+        "light.center.y 4",
+        "ball.translate.x 0",
+    ] {
+        assert!(lines.contains(&expected), "{expected:?} not in {stdout}");
+    }
+    assert!(lines.iter().all(|l| l.split(' ').count() == 2), "{stdout}");
+    assert_eq!(outputs(&dir, &[]), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+#[ignore = "needs Scene::select_parameters and render_derivatives (params, derivative branches)"]
+fn diff_writes_the_promised_channels() {
+    let dir = workdir("diff");
+    write_scene(&dir, |_| {});
+    let out = run(
+        &dir,
+        &[
+            "diff",
+            "scene.json",
+            "--param",
+            "ball.radius",
+            "--param",
+            "light.center.y",
+            "--spp",
+            "2",
+        ],
+    );
+    let stdout = assert_success(&out);
+    assert!(
+        stdout.contains("note: derivatives hold the interior term only"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("d.ball.radius: PNG colour scale ±"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("d.light.center.y: PNG colour scale ±"),
+        "{stdout}"
+    );
+    assert_eq!(outputs(&dir, &["scene.json"]), ["diff.exr", "diff.png"]);
+    let (w, h, names) = exr_channels(&dir.join("diff.exr"));
+    assert_eq!((w, h), (16, 16));
+    let expected = [rgb(""), rgb("d.ball.radius."), rgb("d.light.center.y.")].concat();
+    assert_eq!(names, sorted(expected));
+    // The image and two panels, 4 pixels apart.
+    assert_eq!(png_size(&dir.join("diff.png")), (3 * 16 + 2 * 4, 16));
+
+    // --terms adds the interior term under its own name; other file names.
+    let out = run(
+        &dir,
+        &[
+            "diff",
+            "scene.json",
+            "--param",
+            "ball.radius",
+            "--spp",
+            "1",
+            "--terms",
+            "--out",
+            "t.exr",
+            "--png",
+            "t.png",
+        ],
+    );
+    assert_success(&out);
+    let (_, _, names) = exr_channels(&dir.join("t.exr"));
+    let expected = [
+        rgb(""),
+        rgb("d.ball.radius."),
+        rgb("d_interior.ball.radius."),
+    ]
+    .concat();
+    assert_eq!(names, sorted(expected));
+    assert_eq!(png_size(&dir.join("t.png")), (2 * 16 + 4, 16));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+#[ignore = "needs Scene::parameters and with_parameter (params branch)"]
+fn fd_writes_the_promised_channels() {
+    let dir = workdir("fd");
+    write_scene(&dir, |_| {});
+    let out = run(
+        &dir,
+        &["fd", "scene.json", "--param", "ball.radius", "--spp", "2"],
+    );
+    let stdout = assert_success(&out);
+    assert!(stdout.contains("ball.radius = 1 with h = 0.01"), "{stdout}");
+    assert_eq!(outputs(&dir, &["scene.json"]), ["fd.exr", "fd.png"]);
+    let (w, h, names) = exr_channels(&dir.join("fd.exr"));
+    assert_eq!((w, h), (16, 16));
+    assert_eq!(names, sorted([rgb(""), rgb("d.ball.radius.")].concat()));
+    assert_eq!(png_size(&dir.join("fd.png")), (2 * 16 + 4, 16));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn compare_of_a_file_with_itself() {
+    let dir = workdir("compare-self");
+    write_exr(
+        &dir.join("a.exr"),
+        8,
+        4,
+        &["R", "G", "B", "d.p.R", "d_interior.p.R"],
+    );
+    let stdout = assert_success(&run(&dir, &["compare", "a.exr", "a.exr"]));
+    assert_eq!(printed_error(&stdout, "d.p.R"), 0.0);
+    assert_eq!(printed_error(&stdout, "d_interior.p.R"), 0.0);
+    // Image channels only when asked for.
+    assert!(!stdout.lines().any(|l| l.starts_with("R ")), "{stdout}");
+    let stdout = assert_success(&run(&dir, &["compare", "a.exr", "a.exr", "--channel", "R"]));
+    assert_eq!(printed_error(&stdout, "R"), 0.0);
+    assert!(!stdout.contains("d.p.R"), "{stdout}");
+    assert_eq!(outputs(&dir, &["a.exr"]), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn compare_rejects_mismatched_files() {
+    let dir = workdir("compare-bad");
+    write_exr(&dir.join("a.exr"), 8, 4, &["R", "d.p.R"]);
+    write_exr(&dir.join("b.exr"), 4, 8, &["R", "d.p.R"]);
+    write_exr(&dir.join("c.exr"), 8, 4, &["R", "d.q.R"]);
+    let inputs = ["a.exr", "b.exr", "c.exr"];
+    assert_failure(
+        &run(&dir, &["compare", "a.exr", "b.exr"]),
+        "image sizes differ: 8x4 and 4x8",
+    );
+    assert_failure(
+        &run(&dir, &["compare", "a.exr", "c.exr"]),
+        "no derivative channel",
+    );
+    assert_failure(
+        &run(&dir, &["compare", "a.exr", "a.exr", "--channel", "d.q"]),
+        "no channel starting with \"d.q\"",
+    );
+    assert_failure(&run(&dir, &["compare", "a.exr", "nope.exr"]), "nope.exr");
+    assert_eq!(outputs(&dir, &inputs), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The albedo enters the image linearly: the forward-mode derivative and the central difference agree
+/// to rounding (same seed, same samples), so `compare` reports a tiny error.
+#[test]
+#[ignore = "needs the params and derivative branches"]
+fn diff_and_fd_agree_on_a_linear_parameter() {
+    let dir = workdir("diff-vs-fd");
+    write_scene(&dir, |_| {});
+    let common = ["scene.json", "--param", "ball.albedo.r", "--spp", "2"];
+    assert_success(&run(&dir, &[&["diff"], &common[..]].concat()));
+    assert_success(&run(&dir, &[&["fd"], &common[..]].concat()));
+    let stdout = assert_success(&run(&dir, &["compare", "diff.exr", "fd.exr"]));
+    let error = printed_error(&stdout, "d.ball.albedo.r.R");
+    assert!(error < 1e-3, "relative error {error}\n{stdout}");
+    // The green and blue channels do not depend on the red albedo: both zero.
+    assert_eq!(printed_error(&stdout, "d.ball.albedo.r.G"), 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_arguments_exit_2_without_output() {
+    let dir = workdir("bad-args");
+    write_scene(&dir, |_| {});
+    let cases: &[(&[&str], &str)] = &[
+        (&["diff", "scene.json"], "--param"),
+        (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--param",
+                "ball.radius",
+            ],
+            "--param ball.radius given twice",
+        ),
+        (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--out",
+                "no/x.exr",
+            ],
+            "--out no/x.exr: folder no does not exist",
+        ),
+        (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--normalization",
+                "soft",
+            ],
+            "--normalization",
+        ),
+        (
+            &["fd", "scene.json", "--param", "ball.radius", "--h", "0"],
+            "--h",
+        ),
+        (
+            &["fd", "scene.json", "--param", "ball.radius", "--h=-1"],
+            "--h",
+        ),
+        (&["fd", "scene.json"], "--param"),
+        (
+            &["diff", "missing.json", "--param", "ball.radius"],
+            "missing.json",
+        ),
+        (&["params", "missing.json"], "missing.json"),
+    ];
+    for (args, expected) in cases {
+        assert_failure(&run(&dir, args), expected);
+    }
+    assert_eq!(outputs(&dir, &["scene.json"]), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+#[ignore = "needs the params and derivative branches"]
+fn bad_parameters_exit_2_without_output() {
+    let dir = workdir("bad-params");
+    write_scene(&dir, |_| {});
+    std::fs::write(
+        dir.join("box.json"),
+        std::fs::read_to_string(dir.join("scene.json"))
+            .unwrap()
+            .replace("\"tent\"", "\"box\""),
+    )
+    .unwrap();
+    let inputs = ["scene.json", "box.json"];
+    // Unknown names: the registry's message, with near matches.
+    assert_failure(
+        &run(&dir, &["diff", "scene.json", "--param", "ball.radios"]),
+        "ball.radius",
+    );
+    assert_failure(
+        &run(&dir, &["fd", "scene.json", "--param", "ball.radios"]),
+        "ball.radius",
+    );
+    // A step that makes the radius negative.
+    assert_failure(
+        &run(
+            &dir,
+            &["fd", "scene.json", "--param", "ball.radius", "--h", "2"],
+        ),
+        "radius",
+    );
+    // Derivatives through a box filter are refused by the library.
+    assert_failure(
+        &run(&dir, &["diff", "box.json", "--param", "ball.radius"]),
+        "box",
+    );
+    assert_eq!(outputs(&dir, &inputs), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
