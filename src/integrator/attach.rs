@@ -19,12 +19,11 @@
 //! as constants (no Hessian).
 
 use super::path::{Anchor, Attach, Attached};
-use crate::bsdf::Bsdf;
 use crate::emitter::Emitter;
 use crate::math::Vec3;
-use crate::scalar::{Param, Param3, Scalar, Slot};
+use crate::scalar::{Param, Scalar, Slot};
 use crate::scene::{Scene, Shape};
-use crate::sdf::Sdf;
+
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// A first-order dual number in the three spatial directions with coefficients in `S`: `v + Σ g_i ε_i`.
@@ -290,129 +289,11 @@ fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
     Vec3::constant(primal) + (v - v.detach())
 }
 
-/// Calls `f` on every parameter of `sdf`.
-pub fn sdf_params(sdf: &mut Sdf, f: &mut dyn FnMut(&mut Param)) {
-    let p3 = |p: &mut Param3, f: &mut dyn FnMut(&mut Param)| p.c.iter_mut().for_each(&mut *f);
-    match sdf {
-        Sdf::Sphere { center, radius } => {
-            p3(center, f);
-            f(radius);
-        }
-        Sdf::Box {
-            center,
-            half_size,
-            rounding,
-        } => {
-            p3(center, f);
-            p3(half_size, f);
-            f(rounding);
-        }
-        Sdf::Torus {
-            center,
-            major_radius,
-            minor_radius,
-            ..
-        } => {
-            p3(center, f);
-            f(major_radius);
-            f(minor_radius);
-        }
-        Sdf::Cylinder {
-            center,
-            radius,
-            half_height,
-            rounding,
-            ..
-        } => {
-            p3(center, f);
-            f(radius);
-            f(half_height);
-            f(rounding);
-        }
-        Sdf::Capsule { a, b, radius } => {
-            p3(a, f);
-            p3(b, f);
-            f(radius);
-        }
-        Sdf::Plane { offset, .. } => f(offset),
-        Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
-            children.iter_mut().for_each(|c| sdf_params(c, f))
-        }
-        Sdf::SmoothUnion { children, k } => {
-            children.iter_mut().for_each(|c| sdf_params(c, f));
-            f(k);
-        }
-        Sdf::Transform {
-            translate,
-            angle,
-            scale,
-            child,
-            ..
-        } => {
-            p3(translate, f);
-            f(angle);
-            f(scale);
-            sdf_params(child, f);
-        }
-        Sdf::Grid { .. } => {}
-    }
-}
-
-/// Calls `f` on every parameter of `shape` (its SDF, its translation, its material).
-pub fn shape_params(shape: &mut Shape, f: &mut dyn FnMut(&mut Param)) {
-    sdf_params(&mut shape.sdf, f);
-    shape.translate.c.iter_mut().for_each(&mut *f);
-    match &mut shape.bsdf {
-        Bsdf::Diffuse { albedo } => albedo.c.iter_mut().for_each(&mut *f),
-    }
-}
-
-/// Calls `f` on every parameter of `emitter`.
-pub fn emitter_params(emitter: &mut Emitter, f: &mut dyn FnMut(&mut Param)) {
-    match emitter {
-        Emitter::Rectangle {
-            center,
-            size,
-            radiance,
-            ..
-        } => {
-            center.c.iter_mut().for_each(&mut *f);
-            size.iter_mut().for_each(&mut *f);
-            radiance.c.iter_mut().for_each(&mut *f);
-        }
-        Emitter::Sphere {
-            center,
-            radius,
-            radiance,
-        } => {
-            center.c.iter_mut().for_each(&mut *f);
-            f(radius);
-            radiance.c.iter_mut().for_each(&mut *f);
-        }
-        Emitter::Constant { radiance } => radiance.c.iter_mut().for_each(&mut *f),
-    }
-}
-
-/// Calls `f` on every parameter of the scene (camera, shapes, emitters).
-pub fn scene_params(scene: &mut Scene, f: &mut dyn FnMut(&mut Param)) {
-    let c = &mut scene.camera;
-    for p in [&mut c.origin, &mut c.target, &mut c.up] {
-        p.c.iter_mut().for_each(&mut *f);
-    }
-    f(&mut c.fov_y);
-    for s in &mut scene.shapes {
-        shape_params(s, f);
-    }
-    for e in &mut scene.emitters {
-        emitter_params(&mut e.emitter, f);
-    }
-}
-
 /// A copy of `scene` for the derivative pass over slots `lo .. lo + width`: slot `k` in that window
 /// becomes `k − lo`, every other slot none.
 pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
     let mut s = scene.clone();
-    scene_params(&mut s, &mut |p: &mut Param| {
+    s.visit_params_mut(&mut |_, p: &mut Param| {
         p.slot = p.slot.and_then(|k| {
             let k = usize::from(k);
             (k >= lo && k < lo + width).then(|| (k - lo) as u16)
@@ -423,10 +304,10 @@ pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
 
 /// Whether the geometry of a shape (SDF or translation, not the material) has a selected parameter.
 fn geometry_selected(shape: &Shape) -> bool {
-    let mut any = false;
-    let mut s = shape.clone();
-    sdf_params(&mut s.sdf, &mut |p: &mut Param| any |= p.slot.is_some());
-    s.translate.c.iter().for_each(|p| any |= p.slot.is_some());
+    let mut any = shape.translate.c.iter().any(|p| p.slot.is_some());
+    shape
+        .sdf
+        .visit_params("", &mut |_, p: &Param| any |= p.slot.is_some());
     any
 }
 
@@ -573,10 +454,13 @@ impl<S: Scalar> Attach<S> for SceneAttach<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bsdf::Bsdf;
     use crate::camera::Camera;
     use crate::film::Filter;
     use crate::integrator::IntegratorKind;
     use crate::scalar::Dual32;
+    use crate::scalar::Param3;
+    use crate::sdf::Sdf;
 
     fn scene_with(sdf: Sdf) -> Scene {
         let camera = Camera::new(
