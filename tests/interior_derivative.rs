@@ -258,6 +258,10 @@ fn fd_error(
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_finite(&d.interior, "fd_error");
     let fd = finite_difference(&|v| build(v, false), value, h, spp_fd);
+    eprintln!(
+        "  unblurred: relative L2 vs FD {:.4}",
+        relative_l2(&d.interior[0], &fd, &mask)
+    );
     let (a, grown) = blur3(&d.interior[0], &mask);
     let (b, _) = blur3(&d2.interior[0], &mask);
     let (fd, _) = blur3(&fd, &mask);
@@ -362,41 +366,30 @@ fn deterministic_across_thread_counts() {
 }
 
 /// `∂I/∂ρ_r = I_r / ρ_r` where every path scatters once off the sphere (direct integrator, light out of
-/// view), and `∂I/∂L_r = I_r / L_r` with one emitter.
-///
-/// Each sample's contribution is exactly linear in the parameter, but the derivative splats every sample
-/// into all pixels its film position reaches (weights summing to one), so the exact identity holds for
-/// the image's total, to rounding; per pixel it holds in expectation (checked after a 3×3 blur, within
-/// the noise of 64 spp). Green and blue do not depend on a red parameter at all.
+/// view), and `∂I/∂L_r = I_r / L_r` with one emitter, per pixel to rounding: nothing moves, so the
+/// derivative is the image's own estimator differentiated. Green and blue do not depend on a red
+/// parameter at all.
 #[test]
 fn linear_parameters_are_exact() {
     for (which, value) in [(SphereParam::AlbedoR, 0.7), (SphereParam::RadianceR, 20.0)] {
         let scene = sphere_scene(which, value, true);
-        let d = render_derivatives(&scene, 1, &options(64, 5, Normalization::Fixed)).unwrap();
-        let expect: Image = Image {
-            // Red only: I_r / value, zero in green and blue.
-            rgb: (d.image.rgb.iter().enumerate())
-                .map(|(i, v)| if i % 3 == 0 { v / value } else { 0.0 })
-                .collect(),
-            ..d.image.clone()
-        };
-        let red = |im: &Image| im.channel(0).iter().map(|&v| v as f64).sum::<f64>();
-        let (total, analytic) = (red(&d.interior[0]), red(&expect));
-        assert!(analytic > 1.0, "the sphere is lit ({analytic})");
-        assert!(
-            (total - analytic).abs() <= 1e-5 * analytic,
-            "sum of the derivative {total} vs sum of I/π {analytic}"
-        );
-        for p in 0..(SIZE * SIZE) as usize {
-            assert_eq!(d.interior[0].rgb[3 * p + 1], 0.0);
-            assert_eq!(d.interior[0].rgb[3 * p + 2], 0.0);
+        for normalization in [Normalization::Fixed, Normalization::Differentiable] {
+            let d = render_derivatives(&scene, 1, &options(4, 5, normalization)).unwrap();
+            let scale = d.image.rgb.iter().fold(0.0f32, |m, v| m.max(v.abs())) / value;
+            let mut lit = 0;
+            for p in 0..(SIZE * SIZE) as usize {
+                let expect = d.image.rgb[3 * p] / value;
+                let got = d.interior[0].rgb[3 * p];
+                assert!(
+                    (got - expect).abs() <= 1e-5 * scale,
+                    "pixel {p}: {got} vs {expect}"
+                );
+                assert_eq!(d.interior[0].rgb[3 * p + 1], 0.0);
+                assert_eq!(d.interior[0].rgb[3 * p + 2], 0.0);
+                lit += (expect > 0.0) as usize;
+            }
+            assert!(lit > 50, "the sphere covers many lit pixels ({lit})");
         }
-        let none = vec![false; (SIZE * SIZE) as usize];
-        let (a, _) = blur3(&d.interior[0], &none);
-        let (b, _) = blur3(&expect, &none);
-        let err = relative_l2(&a, &b, &none);
-        eprintln!("linear parameter {value}: blurred per-pixel relative L2 {err:.4}");
-        assert!(err < 0.03, "per pixel (blurred): relative L2 {err}");
     }
 }
 

@@ -2,19 +2,28 @@
 //! integral"). Paths are sampled in `f32` exactly as for the image; their contributions are re-evaluated
 //! with a dual scalar type at attached vertices ([`super::attach`]).
 //!
-//! **The moving pixel filter.** Pixel `j` is `I_j = ∫ w_j(proj x1) J_film(x1) L(x̄) dA(x1)`: as `x1` and the
-//! camera move, the film position of `x1` moves under the filter. Dividing `∂w_j` by the density of the
-//! sample's own filter, `w(o)`, as the image does, has infinite variance (`∂w/w ~ 1/(1 − |o|)` at the
-//! tent's edge; measured: relative noise above 1 at 64 spp). Instead every sample, drawn by any pixel,
-//! splats into every pixel `j` whose filter covers it, with the mixture density of all pixels' samples:
-//! `∂I_j ≈ (1/spp) Σ_s ∂[w_j(proj_S x1) J_film,S L_S] / (J_film Σ_i w_i(f_s))` (detached denominator,
-//! `Σ_i w_i = 1` for the tent inside the image). No division by a vanishing weight remains. The image
-//! channel is still the mean of each pixel's own samples, bit for bit as [`super::render`].
-//! Directions at infinity (the environment seen directly, or a camera ray that escapes) use the film
-//! area per steradian, `J_ω = f²/cos³θ_c`, in place of `J_film`.
+//! **The moving pixel filter.** Pixel `j` is `I_j = ∫ w_j(proj x1) J_film(x1) L(x̄) dA(x1)` over the
+//! reference surface (`J_film` the film area per unit area of `x1`; `L` includes the area factors `J` of
+//! the attached vertices): as `x1` and the camera move, the film position of `x1` moves under the filter.
+//! By the product rule `∂I_j = ∫ w_j J_film ∂L + ∫ ∂(w_j J_film) L`:
+//! - the first term is estimated exactly like the image, from pixel `j`'s own samples (density
+//!   `w_j J_film`): `(1/spp) Σ_{s ∈ j} ∂L_s`. A parameter that moves nothing (an albedo, a radiance) has
+//!   only this term, so its derivative image is the image's own estimator differentiated, per pixel;
+//! - the second term is estimated from the samples of all pixels whose film point falls under `w_j`,
+//!   with their mixture density `Σ_i w_i` (1 for the tent inside the image, whose translates partition
+//!   unity): `(1/spp) Σ_s L_s ∂(w_j J_film)_s / (J_film Σ_i w_i)_s`, denominators detached. Dividing by the
+//!   sample's own `w(o)` instead would have infinite variance (`∂w/w ~ 1/(1 − |o|)` at the tent's edge;
+//!   measured: relative noise above 1 at 64 spp on a moving sphere).
 //!
-//! **Normalisation.** `Fixed`: `∂F_j` with `F_j` the splatted sum above. `Differentiable`: `∂(F_j / W_j)`
-//! with `W_j = (1/spp) Σ_s w_j J_film,S / (J_film Σ_i w_i)` accumulated in `S` too (seed §3).
+//! Directions at infinity (the environment seen directly, or a camera ray that escapes) use the film
+//! area per steradian, `J_ω = f²/cos³θ_c`, in place of `J_film`. The image channel is the mean of each
+//! pixel's own samples, bit for bit as [`super::render`].
+//!
+//! **Normalisation** (seed §3). `Fixed`: the estimate above. `Differentiable`: the derivative of `F_j /
+//! W_j`, `F_j` the estimate above (primal: the image) and `W_j = ∫ w_j J_film dA` estimated like the
+//! second term with `L = 1` (primal 1): `∂F_j − I_j ∂W_j`, which turns the second term into
+//! `Σ_s (L_s − I_j) ∂(w_j J_film)_s / …`, a control variate (`E[∂W_j] = 0` up to `W`'s own primary
+//! boundary term, which the boundary issue adds).
 //!
 //! Parameters are processed in passes of the scalar type's width (`DualN<N>` carries `N` directions); each
 //! pass traces the same paths (same seed), so passes agree on the image and on shared parameters.
@@ -161,10 +170,13 @@ struct PassOutput {
     stats: RenderStats,
 }
 
-/// What the samples of one row contribute: its image row, and the filter-weighted sums `F` and `W` they
-/// splat into the `band` rows around it (row `y − reach + b` in band row `b`).
+/// What the samples of one row contribute: its image row, its own sums, and the derivatives of the
+/// filter-weighted sums `F` and `W` they splat into the `band` rows around it (row `y − reach + b` in band
+/// row `b`).
 struct Row<S> {
     rgb: Vec<f32>,
+    /// Per pixel of the row: the sum of its own samples' contributions in `S`.
+    own: Vec<Vec3<S>>,
     f: Vec<Vec3<S>>,
     w: Vec<S>,
     exhausted: u64,
@@ -200,6 +212,7 @@ fn render_pass<S: Directions>(
             let mut counters = TraceCounters::default();
             let mut row = Row {
                 rgb: vec![0.0; row_len],
+                own: vec![Vec3::zero(); w as usize],
                 f: vec![Vec3::zero(); band * w as usize],
                 w: vec![S::zero(); band * w as usize],
                 exhausted: 0,
@@ -226,38 +239,38 @@ fn render_pass<S: Directions>(
                         row.invalid += 1;
                         l = Vec3::zero();
                     }
-                    let Some(((px, py), jacobian)) = film_point(&frame, ray.d, first) else {
-                        continue;
-                    };
-                    let film = centre + offset;
+                    let film_point = film_point(&frame, ray.d, first);
                     // Density of the film point among all pixels' samples (per pixel's spp), times the
                     // film area per unit of x1's measure: the detached density of x1.
-                    let density = mixture_density(&filter, film, wi, hi) * jacobian.primal();
-                    if !(density > 0.0 && density.is_finite()) {
-                        continue;
-                    }
-                    let mut scale = jacobian / density;
+                    let motion = film_point.and_then(|((px, py), jacobian)| {
+                        let density =
+                            mixture_density(&filter, centre + offset, wi, hi) * jacobian.primal();
+                        (density > 0.0 && density.is_finite()).then(|| (px, py, jacobian / density))
+                    });
                     let ok = finite(l.x, width)
                         && finite(l.y, width)
                         && finite(l.z, width)
-                        && finite(scale, width)
-                        && finite(px, width)
-                        && finite(py, width);
-                    let (px, py) = if ok {
-                        (px, py)
-                    } else {
+                        && motion.is_none_or(|(px, py, scale)| {
+                            finite(px, width) && finite(py, width) && finite(scale, width)
+                        });
+                    if !ok {
                         if row.invalid_d == 0 && !reported.swap(true, Ordering::Relaxed) {
                             eprintln!(
                                 "non-finite derivative (parameters {lo}..{}) at pixel ({x}, {y}), \
-                                 sample {s}: {l:?}, film position ({px:?}, {py:?}), {scale:?}",
+                                 sample {s}: {l:?}, film motion {motion:?}",
                                 lo + width
                             );
                         }
                         row.invalid_d += 1;
                         l = l.detach();
-                        scale = scale.detach();
-                        (px.detach(), py.detach())
+                    }
+                    // ∂L at a fixed filter weight: the pixel's own sample, as for the image.
+                    row.own[x as usize] += l;
+                    let Some((px, py, scale)) = motion.filter(|_| ok) else {
+                        continue;
                     };
+                    // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
+                    let lp = Vec3::<S>::constant(l.primal());
                     for jy in (y as i64 - reach).max(0)..=(y as i64 + reach).min(hi - 1) {
                         let dy = py - (jy as f32 + 0.5);
                         if dy.primal().abs() >= radius {
@@ -269,10 +282,11 @@ fn render_pass<S: Directions>(
                             if dx.primal().abs() >= radius {
                                 continue;
                             }
-                            let factor = filter.eval(dx, dy) * scale;
+                            let weight = filter.eval(dx, dy) * scale;
+                            let dw = weight - weight.detach();
                             let i = band_row + jx as usize;
-                            row.f[i] += l * factor;
-                            row.w[i] += factor;
+                            row.f[i] += lp * dw;
+                            row.w[i] += dw;
                         }
                     }
                 }
@@ -289,6 +303,7 @@ fn render_pass<S: Directions>(
         .collect();
     // Gather the splats in a fixed order (source rows ascending): the same sums whatever the threads.
     let n = (w * h) as usize;
+    let mut own = vec![Vec3::<S>::zero(); n];
     let mut f_sum = vec![Vec3::<S>::zero(); n];
     let mut w_sum = vec![S::zero(); n];
     let mut image = Image::new(w, h);
@@ -298,6 +313,7 @@ fn render_pass<S: Directions>(
     };
     for (y, row) in rows.iter().enumerate() {
         image.rgb[y * row_len..(y + 1) * row_len].copy_from_slice(&row.rgb);
+        own[y * w as usize..(y + 1) * w as usize].copy_from_slice(&row.own);
         for b in 0..band {
             let jy = y as i64 - reach + b as i64;
             if jy < 0 || jy >= hi {
@@ -314,16 +330,14 @@ fn render_pass<S: Directions>(
         stats.invalid_derivatives += row.invalid_d;
     }
     let mut derivatives = vec![Image::new(w, h); width];
-    let inv_spp = 1.0 / spp as f32;
+    let inv_spp = S::constant(1.0 / spp as f32);
     for p in 0..n {
-        let (f, wt) = (f_sum[p], w_sum[p]);
+        // F = (own + motion)/spp with primal the image; W = 1 + (Σ ∂(w J)/(J Σw))/spp.
+        let f = (own[p] + f_sum[p]) * inv_spp;
         let pixel = match options.normalization {
-            Normalization::Fixed => f * S::constant(inv_spp),
-            // F / W, both sums in S: ∂F/W − F ∂W/W² (seed §3, eq. 26).
-            Normalization::Differentiable if wt.primal() > 0.0 => {
-                Vec3::new(f.x / wt, f.y / wt, f.z / wt)
-            }
-            Normalization::Differentiable => Vec3::zero(),
+            Normalization::Fixed => f,
+            // ∂(F/W) = ∂F/W − F ∂W/W² with W = 1 at the primal (seed §3, eq. 26).
+            Normalization::Differentiable => f - Vec3::constant(f.primal()) * (w_sum[p] * inv_spp),
         };
         for (k, d) in derivatives.iter_mut().enumerate() {
             d.rgb[3 * p] = pixel.x.direction(k);
