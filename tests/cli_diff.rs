@@ -121,7 +121,6 @@ fn write_exr(path: &Path, width: u32, height: u32, names: &[&str]) {
 }
 
 #[test]
-#[ignore = "needs Scene::parameters (params branch)"]
 fn params_lists_the_default_scene() {
     let dir = workdir("params");
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
@@ -141,7 +140,6 @@ fn params_lists_the_default_scene() {
 }
 
 #[test]
-#[ignore = "needs Scene::select_parameters and render_derivatives (params, derivative branches)"]
 fn diff_writes_the_promised_channels() {
     let dir = workdir("diff");
     write_scene(&dir, |_| {});
@@ -210,7 +208,6 @@ fn diff_writes_the_promised_channels() {
 }
 
 #[test]
-#[ignore = "needs Scene::parameters and with_parameter (params branch)"]
 fn fd_writes_the_promised_channels() {
     let dir = workdir("fd");
     write_scene(&dir, |_| {});
@@ -276,7 +273,6 @@ fn compare_rejects_mismatched_files() {
 /// The albedo enters the image linearly: the forward-mode derivative and the central difference agree
 /// to rounding (same seed, same samples), so `compare` reports a tiny error.
 #[test]
-#[ignore = "needs the params and derivative branches"]
 fn diff_and_fd_agree_on_a_linear_parameter() {
     let dir = workdir("diff-vs-fd");
     write_scene(&dir, |_| {});
@@ -353,7 +349,6 @@ fn bad_arguments_exit_2_without_output() {
 }
 
 #[test]
-#[ignore = "needs the params and derivative branches"]
 fn bad_parameters_exit_2_without_output() {
     let dir = workdir("bad-params");
     write_scene(&dir, |_| {});

@@ -88,7 +88,6 @@ mod tests {
     /// The image of a sphere under a constant sky alone is linear and homogeneous in the sky's red
     /// radiance: `∂R/∂L_r = R / L_r`, and the green and blue channels do not depend on it at all.
     #[test]
-    #[ignore = "needs Scene::parameters / with_parameter (params branch)"]
     fn linear_parameter_matches_closed_form() {
         let json = r#"{
             "camera": {"origin": [0, 3, 4], "target": [0, 0, 0], "up": [0, 1, 0],
