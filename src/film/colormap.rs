@@ -17,7 +17,7 @@ const CONTROL: [[u8; 3]; 7] = [
 ];
 
 /// The diverging map at `t ∈ [-1, 1]` as sRGB components in `[0, 1]`: `-1` blue, `0` white, `+1` red,
-/// piecewise linear in sRGB between the [`CONTROL`] colours. `t` outside `[-1, 1]` is clamped (the end
+/// piecewise linear in sRGB between the `CONTROL` colours (ColorBrewer RdBu, white centre). `t` outside `[-1, 1]` is clamped (the end
 /// colours); NaN maps to black so that it stands out from every value of the map.
 pub fn diverging(t: f32) -> [f32; 3] {
     if t.is_nan() {
