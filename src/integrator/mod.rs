@@ -10,6 +10,7 @@ pub mod derivative;
 pub mod fd;
 pub mod path;
 pub mod shading;
+pub mod silhouette_boxes;
 
 use crate::camera::CameraFrame;
 use crate::film::Image;

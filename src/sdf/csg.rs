@@ -28,6 +28,11 @@ pub(super) fn smin<S: Scalar>(a: S, b: S, k: S) -> S {
     if kp.is_nan() || kp <= 0.0 {
         return m;
     }
+    // Interval types take a tight enclosure of the same function: the branch on `s` below holds at the
+    // midpoint only, and the formula's interval extension would not shrink where `a = b` in the box.
+    if let Some(v) = super::interval::smin_dispatch(a, b, k) {
+        return v;
+    }
     let s = (a - b).abs();
     if s.primal() >= kp {
         // Outside the blend: exactly the minimum (and its derivatives, all orders).

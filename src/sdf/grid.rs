@@ -60,7 +60,7 @@ impl GridData {
 
     /// True if the grid can be evaluated (see [`GridData::validate`]; finiteness is not rechecked).
     #[inline(always)]
-    fn usable(&self) -> bool {
+    pub(super) fn usable(&self) -> bool {
         let [nx, ny, nz] = self.dims;
         nx >= 4 && ny >= 4 && nz >= 4 && self.values.len() == nx * ny * nz
     }
@@ -141,6 +141,11 @@ pub(super) fn eval<S: Scalar>(
     bmax: glam::Vec3,
     p: Vec3<S>,
 ) -> S {
+    // Interval types take the certified path: a box may span several cells, which the primal branches
+    // below (inside the grid box or not, which cell) cannot express.
+    if let Some(v) = super::interval::grid_dispatch(data, bmin, bmax, p) {
+        return v;
+    }
     if !data.usable() {
         return S::constant(f32::INFINITY);
     }

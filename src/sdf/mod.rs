@@ -26,6 +26,7 @@
 mod bake;
 mod csg;
 mod grid;
+pub mod interval;
 mod npy;
 mod primitives;
 mod transform;

@@ -1,0 +1,115 @@
+//! Certified culling for the primary boundary: boxes that may hold a silhouette point seen from the camera.
+//!
+//! Seen from the camera centre `c`, the silhouette (contour generator) of a shape is the curve
+//! `{φ = 0, ψ = 0}` with `ψ(x) = ∇φ(x)·(c − x)`: surface points whose tangent plane holds the eye (DESIGN §3,
+//! "Boundary integrals"; seed §2). An octree over the shape's bounds discards a box `B` when interval
+//! arithmetic proves `0 ∉ φ(B)` (no surface) or `0 ∉ ψ(B)` (surface, but no silhouette), with
+//! `ψ(B) ⊂ Σ_k ∇_kφ(B) · (c_k − B_k)` from [`IntervalGrad`] enclosures of the gradient
+//! ([`crate::sdf::interval`]). Every silhouette point lies in a returned box; the boxes around a curve
+//! number about twice as many per level, their volume about a quarter.
+//!
+//! The shape's rigid `translate` is honoured by evaluating through [`Shape::eval`] in world coordinates.
+
+use crate::error::{Error, Result};
+use crate::math::{Aabb, Vec3};
+use crate::scene::Shape;
+use crate::sdf::interval::{Interval, IntervalGrad};
+use rayon::prelude::*;
+
+/// What interval arithmetic proves about a box.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum BoxClass {
+    /// `0 ∉ φ(B)`: the box holds no surface point.
+    NoSurface,
+    /// `0 ∉ ψ(B)`: the box may hold surface points, but none of them is a silhouette point seen from the eye.
+    NoSilhouette,
+    /// Neither could be proven: the box may hold a silhouette point.
+    Kept,
+}
+
+/// Classify the world-space box `b` for the silhouette of `shape` seen from `eye`.
+pub fn classify_box(shape: &Shape, eye: glam::Vec3, b: &Aabb) -> BoxClass {
+    // The plain interval first: a quarter of the cost, and it settles most of the empty space.
+    let x = Vec3::new(
+        Interval::from_f32(b.min.x, b.max.x),
+        Interval::from_f32(b.min.y, b.max.y),
+        Interval::from_f32(b.min.z, b.max.z),
+    );
+    if !shape.eval(x).contains_zero() {
+        return BoxClass::NoSurface;
+    }
+    let phi = shape.eval(IntervalGrad::seed_box(b));
+    if !phi.v.contains_zero() {
+        return BoxClass::NoSurface;
+    }
+    let psi = (0..3).fold(Interval::ZERO, |acc, k| {
+        let to_eye = Interval::point(eye[k] as f64) - Interval::from_f32(b.min[k], b.max[k]);
+        acc + phi.g[k] * to_eye
+    });
+    if !psi.contains_zero() {
+        return BoxClass::NoSilhouette;
+    }
+    BoxClass::Kept
+}
+
+/// The leaves of an octree over `shape.bounds` that may hold a point of the silhouette seen from `eye`.
+///
+/// A box is split into its eight octants until depth `max_depth` or until its longest edge is at most
+/// `min_size`; a box is dropped as soon as [`classify_box`] proves it holds no silhouette point. Every point
+/// of `{φ = 0, ψ = 0}` inside the bounds lies in one of the returned boxes (closed boxes: a point on a shared
+/// face may be in either). Levels are processed in parallel; the order of the result is deterministic.
+///
+/// Errors if the shape is unbounded (e.g. a plane): the octree needs a finite root.
+pub fn silhouette_boxes(
+    shape: &Shape,
+    eye: glam::Vec3,
+    max_depth: u32,
+    min_size: f32,
+) -> Result<Vec<Aabb>> {
+    let root = shape.bounds;
+    if root.is_empty() {
+        return Ok(Vec::new());
+    }
+    if !root.is_finite() {
+        return Err(Error::Unsupported(format!(
+            "silhouette boxes of shape '{}': unbounded shapes (planes) have no finite octree root",
+            shape.name
+        )));
+    }
+    let mut leaves = Vec::new();
+    let mut frontier = vec![root];
+    for depth in 0..=max_depth {
+        let kept: Vec<Aabb> = frontier
+            .par_iter()
+            .filter(|b| classify_box(shape, eye, b) == BoxClass::Kept)
+            .copied()
+            .collect();
+        let (leaf, inner): (Vec<Aabb>, Vec<Aabb>) = kept
+            .into_iter()
+            .partition(|b| depth == max_depth || b.extent().max_element() <= min_size);
+        leaves.extend(leaf);
+        frontier = inner.iter().flat_map(octants).collect();
+        if frontier.is_empty() {
+            break;
+        }
+    }
+    Ok(leaves)
+}
+
+/// The eight octants of `b` (split at its centre).
+fn octants(b: &Aabb) -> [Aabb; 8] {
+    let c = b.center();
+    std::array::from_fn(|i| {
+        let pick = |bit: usize, k: usize| {
+            if i & bit == 0 {
+                (b.min[k], c[k])
+            } else {
+                (c[k], b.max[k])
+            }
+        };
+        let (x0, x1) = pick(1, 0);
+        let (y0, y1) = pick(2, 1);
+        let (z0, z1) = pick(4, 2);
+        Aabb::new(glam::Vec3::new(x0, y0, z0), glam::Vec3::new(x1, y1, z1))
+    })
+}
