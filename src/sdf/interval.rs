@@ -623,6 +623,8 @@ impl Sub for IntervalGrad {
     }
 }
 
+// The product and quotient rules use `+` and `−` by design.
+#[allow(clippy::suspicious_arithmetic_impl)]
 impl Mul for IntervalGrad {
     type Output = Self;
     #[inline]
@@ -634,6 +636,8 @@ impl Mul for IntervalGrad {
     }
 }
 
+// The product and quotient rules use `+` and `−` by design.
+#[allow(clippy::suspicious_arithmetic_impl)]
 impl Div for IntervalGrad {
     type Output = Self;
     #[inline]
@@ -775,6 +779,8 @@ impl Scalar for IntervalGrad {
 /// What the grid path needs from an interval scalar on top of [`Scalar`]: implemented by [`Interval`] and
 /// [`IntervalGrad`].
 pub trait Enclosure: Scalar {
+    /// True if the type carries derivatives (so the grid path computes partial enclosures).
+    const GRADIENT: bool;
     /// The enclosure of the value.
     fn value(self) -> Interval;
     /// Component-wise [`Interval::intersect`] of two enclosures of the same quantity.
@@ -794,6 +800,7 @@ pub trait Enclosure: Scalar {
 }
 
 impl Enclosure for Interval {
+    const GRADIENT: bool = false;
     #[inline]
     fn value(self) -> Interval {
         self
@@ -825,6 +832,7 @@ impl Enclosure for Interval {
 }
 
 impl Enclosure for IntervalGrad {
+    const GRADIENT: bool = true;
     #[inline]
     fn value(self) -> Interval {
         self.v
@@ -1047,36 +1055,37 @@ fn spline_enclosure<E: Enclosure>(
                 });
                 // The cell's 4 × 4 × 4 control values (taps i − 1 ..= i + 2, at block offset i − 1 − lo).
                 let o = [0, 1, 2].map(|a| (cell[a] - 1 - lo[a]) as usize);
-                let mut c = [Interval::ZERO; 64];
+                let mut c = [0.0f64; 64];
+                let mut cmax = 0.0f64;
                 for z in 0..4 {
                     for y in 0..4 {
                         for x in 0..4 {
-                            c[(z * 4 + y) * 4 + x] =
-                                Interval::point(at(o[0] + x, o[1] + y, o[2] + z));
+                            let v = at(o[0] + x, o[1] + y, o[2] + z);
+                            c[(z * 4 + y) * 4 + x] = v;
+                            cmax = cmax.max(v.abs());
                         }
                     }
                 }
-                let range = |m: [&[[Interval; 4]]; 3]| {
-                    let r = apply(
-                        &apply(&apply(&c, [4, 4, 4], 0, m[0]), [m[0].len(), 4, 4], 1, m[1]),
-                        [m[0].len(), m[1].len(), 4],
-                        2,
-                        m[2],
-                    );
-                    r.iter()
-                        .fold(Interval::new(f64::INFINITY, f64::NEG_INFINITY), |acc, v| {
-                            acc.hull(*v)
-                        })
+                // Rounding of the f64 transform: each coefficient is a sum of 64 products of three row
+                // entries and a control value, Σ|terms| ≤ 6 max|c| (value rows are convex, derivative rows
+                // sum to at most 6 in absolute value), about 25 roundings deep: error ≤ 25 · 2⁻⁵³ · 6 max|c|
+                // ≈ 2e-14 max|c|. The margin is 50 times that.
+                let margin = 1e-12 * cmax;
+                let (m, d) = (rows.map(|r| r.0), rows.map(|r| r.1));
+                let zy = apply(&apply(&c, [4, 4, 4], 2, &m[2]), [4, 4, 4], 1, &m[1]);
+                let v = range(&apply(&zy, [4, 4, 4], 0, &m[0]), [4, 4, 4], margin);
+                let partials: [Interval; 3] = if E::GRADIENT {
+                    let zx = apply(&apply(&c, [4, 4, 4], 2, &m[2]), [4, 4, 4], 0, &m[0]);
+                    let yx = apply(&apply(&c, [4, 4, 4], 1, &m[1]), [4, 4, 4], 0, &m[0]);
+                    let d = [
+                        range(&apply(&zy, [4, 4, 4], 0, &d[0]), [3, 4, 4], margin),
+                        range(&apply(&zx, [4, 4, 4], 1, &d[1]), [4, 3, 4], margin),
+                        range(&apply(&yx, [4, 4, 4], 2, &d[2]), [4, 4, 3], margin),
+                    ];
+                    std::array::from_fn(|a| d[a] * Interval::constant(inv_h[a]))
+                } else {
+                    [Interval::ZERO; 3]
                 };
-                let (mv, dv): (Vec<_>, Vec<_>) = rows.iter().map(|r| (&r.0[..], &r.1[..])).unzip();
-                let v = range([mv[0], mv[1], mv[2]]);
-                let d = [
-                    range([dv[0], mv[1], mv[2]]),
-                    range([mv[0], dv[1], mv[2]]),
-                    range([mv[0], mv[1], dv[2]]),
-                ];
-                let partials: [Interval; 3] =
-                    std::array::from_fn(|a| d[a] * Interval::constant(inv_h[a]));
                 let piece = E::compose(v, partials, q);
                 out = Some(out.map_or(piece, |p| p.hull(piece)));
             }
@@ -1088,70 +1097,84 @@ fn spline_enclosure<E: Enclosure>(
     }
 }
 
-/// Apply the rows `m` (each over 4 inputs) along `axis` of the array `c` of shape `dims` (x fastest).
-fn apply(c: &[Interval], dims: [usize; 3], axis: usize, m: &[[Interval; 4]]) -> Vec<Interval> {
+/// Apply the rows `m` (each over 4 inputs) along `axis` of the 4 × 4 × 4 array `c` (x fastest; `dims` its
+/// used extent): the result has `m.len()` entries along `axis`, same layout.
+fn apply(c: &[f64; 64], dims: [usize; 3], axis: usize, m: &[[f64; 4]]) -> [f64; 64] {
+    let stride = [1, 4, 16];
     let mut out_dims = dims;
     out_dims[axis] = m.len();
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    let mut out = Vec::with_capacity(out_dims.iter().product());
+    let mut out = [0.0; 64];
     for z in 0..out_dims[2] {
         for y in 0..out_dims[1] {
             for x in 0..out_dims[0] {
-                let idx = [x, y, z];
+                let mut idx = [x, y, z];
                 let row = &m[idx[axis]];
-                let mut base = idx;
-                base[axis] = 0;
-                let b = base[0] * stride[0] + base[1] * stride[1] + base[2] * stride[2];
-                let acc = (0..4).fold(Interval::ZERO, |acc, j| {
-                    acc + row[j] * c[b + j * stride[axis]]
-                });
-                out.push(acc);
+                idx[axis] = 0;
+                let b = idx[0] + 4 * idx[1] + 16 * idx[2];
+                let s = stride[axis];
+                out[x + 4 * y + 16 * z] = row[0] * c[b]
+                    + row[1] * c[b + s]
+                    + row[2] * c[b + 2 * s]
+                    + row[3] * c[b + 3 * s];
             }
         }
     }
     out
 }
 
-/// Linear maps from the four control values `d_0..d_3` of one uniform cubic B-spline segment (taps
-/// `i − 1 ..= i + 2`, segment `t ∈ [0, 1]`) to the Bernstein coefficients over `[t0, t1]` of the segment
-/// (4 rows) and of its derivative `d/dt` (3 rows), by blossoming (de Boor's algorithm with distinct
+/// `[min − margin, max + margin]` over the used extent `dims` of a 4 × 4 × 4 array (x fastest).
+fn range(c: &[f64; 64], dims: [usize; 3], margin: f64) -> Interval {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let v = c[x + 4 * y + 16 * z];
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    Interval::new(dn(lo - margin), up(hi + margin))
+}
+
+/// Rows of the linear maps from the four control values `d_0..d_3` of one uniform cubic B-spline segment
+/// (taps `i − 1 ..= i + 2`, segment `t ∈ [0, 1]`) to the Bernstein coefficients over `[t0, t1]` of the
+/// segment (4 rows) and of its derivative `d/dt` (3 rows), by blossoming (de Boor's algorithm with distinct
 /// arguments; Ramshaw, "Blossoms are polar forms", 1989): `b_m = P(t0^{3−m}, t1^m)` and
-/// `b'_m = 3 (P(t0^{2−m}, t1^m, 1) − P(t0^{2−m}, t1^m, 0))`. Entries in interval arithmetic.
+/// `b'_m = 3 (P(t0^{2−m}, t1^m, 1) − P(t0^{2−m}, t1^m, 0))`. For `t0, t1 ∈ [0, 1]` every de Boor weight
+/// lies in `[0, 1]`: value rows are convex (entries ≥ 0, sum 1), derivative rows sum to at most 6 in
+/// absolute value (the rounding margin in `spline_enclosure` relies on it).
 #[allow(clippy::type_complexity)]
-fn bernstein_rows(t0: f64, t1: f64) -> ([[Interval; 4]; 4], [[Interval; 4]; 3]) {
+fn bernstein_rows(t0: f64, t1: f64) -> ([[f64; 4]; 4], [[f64; 4]; 3]) {
     // The segment's knots are −2 … 3 and d_j is the blossom P(j − 2, j − 1, j).
-    type Lin = [Interval; 4];
-    let unit = |j: usize| {
-        let mut e = [Interval::ZERO; 4];
-        e[j] = Interval::point(1.0);
-        e
+    type Lin = [f64; 4];
+    let comb = |wa: f64, a: &Lin, wb: f64, b: &Lin, div: f64| -> Lin {
+        std::array::from_fn(|k| (wa * a[k] + wb * b[k]) / div)
     };
-    let comb = |wa: Interval, a: &Lin, wb: Interval, b: &Lin, div: f64| -> Lin {
-        std::array::from_fn(|k| (wa * a[k] + wb * b[k]) / Interval::point(div))
-    };
-    // P(s1, s2, ·) at the two last-level points: (P(s1, s2, 0), P(s1, s2, 1)).
+    // (P(s1, s2, 0), P(s1, s2, 1)) as rows over d_0..d_3.
     let two = |s1: f64, s2: f64| -> (Lin, Lin) {
-        let (s1, s2) = (Interval::point(s1), Interval::point(s2));
-        let d: [Lin; 4] = std::array::from_fn(unit);
-        let pt = |v: f64| Interval::point(v);
+        let d: [Lin; 4] = std::array::from_fn(|j| {
+            let mut e = [0.0; 4];
+            e[j] = 1.0;
+            e
+        });
         let d1: [Lin; 3] = std::array::from_fn(|i| {
             let j = (i + 1) as f64;
-            comb(pt(j) - s1, &d[i], s1 - pt(j - 3.0), &d[i + 1], 3.0)
+            comb(j - s1, &d[i], s1 - (j - 3.0), &d[i + 1], 3.0)
         });
         let d2: [Lin; 2] = std::array::from_fn(|i| {
             let j = (i + 2) as f64;
-            comb(pt(j - 1.0) - s2, &d1[i], s2 - pt(j - 3.0), &d1[i + 1], 2.0)
+            comb(j - 1.0 - s2, &d1[i], s2 - (j - 3.0), &d1[i + 1], 2.0)
         });
         (d2[0], d2[1])
     };
     let eval3 = |s1: f64, s2: f64, s3: f64| -> Lin {
         let (p0, p1) = two(s1, s2);
-        let s3 = Interval::point(s3);
-        std::array::from_fn(|k| (Interval::point(1.0) - s3) * p0[k] + s3 * p1[k])
+        std::array::from_fn(|k| (1.0 - s3) * p0[k] + s3 * p1[k])
     };
     let deriv = |s1: f64, s2: f64| -> Lin {
         let (p0, p1) = two(s1, s2);
-        std::array::from_fn(|k| (p1[k] - p0[k]) * Interval::point(3.0))
+        std::array::from_fn(|k| 3.0 * (p1[k] - p0[k]))
     };
     (
         [
