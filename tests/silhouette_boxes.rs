@@ -119,6 +119,7 @@ fn nodes() -> Vec<(&'static str, Sdf)> {
             ),
         ),
         ("grid", baked_sphere(16)),
+        ("random grid", random_grid()),
         (
             "transformed grid",
             Sdf::transform(baked_sphere(12), [0.2, 0.0, 0.0], Vec3::Z, 20.0, 0.7),
@@ -128,6 +129,16 @@ fn nodes() -> Vec<(&'static str, Sdf)> {
             Sdf::named("t", Sdf::torus([0.0; 3], Vec3::X, 0.7, 0.2)),
         ),
     ]
+}
+
+/// Control values at random: neighbouring cells' polynomials differ a lot, so a box spanning cells must
+/// not be bounded by one cell's polynomial.
+fn random_grid() -> Sdf {
+    let mut rng = Rng::new(99);
+    let dims = [6, 5, 7];
+    let values = (0..6 * 5 * 7).map(|_| 2.0 * rng.f32() - 1.0).collect();
+    let data = implicit_psdr::sdf::GridData::new(dims, values, "random").unwrap();
+    Sdf::grid(data, Vec3::new(-1.0, -0.8, -1.2), Vec3::new(1.0, 0.8, 1.2)).unwrap()
 }
 
 fn region(sdf: &Sdf) -> (Vec3, Vec3) {
@@ -267,6 +278,35 @@ fn enclosures_hold_values_and_gradients_of_every_node() {
             }
         }
     }
+}
+
+#[test]
+fn smooth_union_enclosure_holds_across_the_blend_edge() {
+    // φ = smin(x, −x) with k = 1: over x ∈ [0.2, 0.8] the midpoint has |a − b| = 1 = k (outside the blend),
+    // but at x = 0.2 the blend still lowers φ and tilts its gradient (∂φ/∂x = −1 + (1 − 2x)² = −0.64).
+    let su = Sdf::smooth_union(
+        vec![Sdf::plane(Vec3::X, 0.0), Sdf::plane(-Vec3::X, 0.0)],
+        1.0,
+    );
+    let b = Aabb::new(Vec3::new(0.2, -0.1, -0.1), Vec3::new(0.8, 0.1, 0.1));
+    let e = su.enclose_gradient(&b);
+    let v = su.enclose(&b);
+    for i in 0..=60 {
+        let p = Vec3::new(0.2 + 0.01 * i as f32, 0.0, 0.0);
+        let (f, g) = (su.eval_f32(p), su.ad_gradient(p));
+        assert!(
+            within(v, f, 1e-6) && within(e.v, f, 1e-6),
+            "φ({p}) = {f}: {v:?}, {:?}",
+            e.v
+        );
+        assert!(
+            within(e.g[0], g.x, 1e-6),
+            "∂φ/∂x({p}) = {}: {:?}",
+            g.x,
+            e.g[0]
+        );
+    }
+    assert!(e.g[0].lo <= -1.0 + 1e-9 && e.g[0].hi >= -0.64 - 1e-6);
 }
 
 #[test]
