@@ -6,6 +6,7 @@
 //! exactly from the pixel filter, so every sample's filter weight over its density is 1.
 
 pub mod attach;
+pub mod boundary;
 pub mod derivative;
 pub mod fd;
 pub mod path;
