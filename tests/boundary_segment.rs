@@ -1,0 +1,479 @@
+//! Boundary-segment geometry (issue 4 item 6): the change of measure `J^B` against the numerical Jacobian
+//! of the map `(x_B, θ_B) ↦ (x_S, x_D)`, and `V_∂` by AD against finite differences of the position of a
+//! shadow boundary.
+//!
+//! The numerical Jacobian is independent of the formulas under test: `x_B(u, v)` is a point of the
+//! surface found by Newton projection along a fixed normal, `θ` an angle in the tangent plane, the line
+//! through `x_B` along `ω(θ)` is cut with receiver planes/spheres, and every derivative comes from
+//! forward-mode dual numbers (`DualN<3>` in `u, v, θ`; the surface normal through a nested spatial
+//! gradient dual). The measure `dA(x_S) dℓ(x_D)` of the image is read off the 6×3 derivative: `k` spans
+//! the kernel of `∂x_S` (the directions that keep `x_S` fixed, along which `x_D` runs on its curve), so
+//! the measure of the unit cube is `|∂x_S q₁ × ∂x_S q₂| · |∂x_D k|` (`q₁, q₂, k` orthonormal), and
+//! `dA(x_B) dθ` is `|∂_u x_B × ∂_v x_B| du dv dθ`.
+
+use implicit_psdr::bsdf::Bsdf;
+use implicit_psdr::integrator::attach::Grad;
+use implicit_psdr::integrator::boundary::{
+    BoundarySegment, boundary_jacobian, is_silhouette_direction, primary_measure_change,
+};
+use implicit_psdr::math::Vec3;
+use implicit_psdr::scalar::{DualN, Param3, Scalar};
+use implicit_psdr::scene::Shape;
+use implicit_psdr::sdf::{Sdf, bake};
+
+type D3 = DualN<3>;
+
+/// A small deterministic generator (splitmix64), so the configurations are reproducible.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f32 {
+        (a + (b - a) * self.next()) as f32
+    }
+    fn unit(&mut self) -> glam::Vec3 {
+        let z = 2.0 * self.next() - 1.0;
+        let phi = std::f64::consts::TAU * self.next();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        glam::DVec3::new(r * phi.cos(), r * phi.sin(), z).as_vec3()
+    }
+}
+
+fn diffuse() -> Bsdf {
+    Bsdf::Diffuse {
+        albedo: Param3::new([0.5; 3]),
+    }
+}
+
+fn dconst(v: glam::Vec3) -> Vec3<D3> {
+    Vec3::constant(v)
+}
+
+/// Newton projection of `p` onto the zero set along the gradient.
+fn project(shape: &Shape, mut p: glam::Vec3) -> glam::Vec3 {
+    for _ in 0..60 {
+        let (v, g) = (shape.eval_f32(p), shape.gradient(p));
+        let g2 = g.length_squared();
+        if g2 == 0.0 {
+            break;
+        }
+        p -= g * (v / g2);
+    }
+    p
+}
+
+/// A receiver surface cut by the line, with the hit's derivatives.
+#[derive(Copy, Clone)]
+enum Receiver {
+    Plane {
+        n: glam::Vec3,
+        p: glam::Vec3,
+    },
+    /// The line enters the sphere at the hit (the smaller root).
+    Sphere {
+        c: glam::Vec3,
+        r: f32,
+    },
+}
+
+impl Receiver {
+    /// Signed distance `s` along `w` from `o` to the hit (`o + s w` on the receiver).
+    fn cut<S: Scalar>(&self, o: Vec3<S>, w: Vec3<S>, forward: bool) -> S {
+        match *self {
+            Receiver::Plane { n, p } => {
+                let nn = Vec3::<S>::constant(n);
+                (Vec3::<S>::constant(p) - o).dot(nn) / w.dot(nn)
+            }
+            Receiver::Sphere { c, r } => {
+                let oc = o - Vec3::<S>::constant(c);
+                let b = oc.dot(w);
+                let disc = b * b - oc.dot(oc) + r * r;
+                let sq = disc.safe_sqrt();
+                if forward { -b - sq } else { -b + sq }
+            }
+        }
+    }
+    fn normal(&self, x: glam::Vec3) -> glam::Vec3 {
+        match *self {
+            Receiver::Plane { n, .. } => n,
+            Receiver::Sphere { c, .. } => (x - c).normalize(),
+        }
+    }
+}
+
+/// One configuration: the base point and frame on `M`, the angle, the receivers.
+struct Config {
+    x0: glam::Vec3,
+    n0: glam::Vec3,
+    e1: glam::Vec3,
+    e2: glam::Vec3,
+    theta0: f32,
+    recv_s: Receiver,
+    recv_d: Receiver,
+}
+
+/// Everything the map `(u, v, θ) ↦ (x_B, x_S, x_D)` gives at 0: primal points and 3×3 derivatives
+/// (`m[i][j] = ∂x_i/∂param_j`, params `u, v, θ`).
+struct MapDerivative {
+    x_b: glam::Vec3,
+    x_s: glam::Vec3,
+    x_d: glam::Vec3,
+    dx_b: [[f64; 3]; 3],
+    dx_s: [[f64; 3]; 3],
+    dx_d: [[f64; 3]; 3],
+}
+
+fn jac(v: Vec3<D3>) -> [[f64; 3]; 3] {
+    [v.x, v.y, v.z].map(|c| c.eps.map(f64::from))
+}
+
+fn eval_map(shape: &Shape, cfg: &Config) -> MapDerivative {
+    let u = D3::variable(0.0, 0);
+    let v = D3::variable(0.0, 1);
+    let th = D3::variable(0.0, 2);
+    // x_B(u, v): the surface point on the line q + s n0, q = x0 + u e1 + v e2. Newton in f32 for s, then
+    // one dual step (implicit function theorem: ∂s = −∇φ·∂q / ∇φ·n0).
+    let mut s = 0.0f32;
+    for _ in 0..60 {
+        let p = cfg.x0 + cfg.n0 * s;
+        let d = shape.gradient(p).dot(cfg.n0);
+        if d == 0.0 {
+            break;
+        }
+        s -= shape.eval_f32(p) / d;
+    }
+    let q = dconst(cfg.x0) + dconst(cfg.e1) * u + dconst(cfg.e2) * v;
+    let p_star = q + dconst(cfg.n0) * D3::constant(s);
+    let d = shape.gradient(p_star.primal()).dot(cfg.n0);
+    let s_d = D3::constant(s) - shape.eval(p_star) / d;
+    let x_b = q + dconst(cfg.n0) * s_d;
+    // ∇φ(x_B) with its (u, v) derivatives: a spatial gradient dual whose coefficients are D3.
+    let (z, o) = (D3::zero(), D3::one());
+    let seed = Vec3::new(
+        Grad {
+            v: x_b.x,
+            g: [o, z, z],
+        },
+        Grad {
+            v: x_b.y,
+            g: [z, o, z],
+        },
+        Grad {
+            v: x_b.z,
+            g: [z, z, o],
+        },
+    );
+    let g = shape.eval(seed).g;
+    let n = Vec3::new(g[0], g[1], g[2]).normalize_or_zero();
+    let e1 = dconst(cfg.e1);
+    let t1 = (e1 - n * e1.dot(n)).normalize_or_zero();
+    let t2 = n.cross(t1);
+    let ang = th + cfg.theta0;
+    let w = t1 * ang.cos() + t2 * ang.sin();
+    let s_s = cfg.recv_s.cut(x_b, w, false);
+    let s_d = cfg.recv_d.cut(x_b, w, true);
+    let x_s = x_b + w * s_s;
+    let x_d = x_b + w * s_d;
+    MapDerivative {
+        x_b: x_b.primal(),
+        x_s: x_s.primal(),
+        x_d: x_d.primal(),
+        dx_b: jac(x_b),
+        dx_s: jac(x_s),
+        dx_d: jac(x_d),
+    }
+}
+
+fn mat_vec(m: &[[f64; 3]; 3], k: glam::DVec3) -> glam::DVec3 {
+    glam::DVec3::new(
+        m[0][0] * k.x + m[0][1] * k.y + m[0][2] * k.z,
+        m[1][0] * k.x + m[1][1] * k.y + m[1][2] * k.z,
+        m[2][0] * k.x + m[2][1] * k.y + m[2][2] * k.z,
+    )
+}
+
+/// Numerical measures from the map's derivative.
+struct Measures {
+    /// `dA(x_S) dℓ(x_D) / (dA(x_B) dθ)`.
+    area_jacobian: f64,
+    /// `dℓ(x_D)/dℓ(x_B)` with `x_S` fixed (the silhouette's arc length at `x_B`): seed eq. 15.
+    fiber_ratio: f64,
+    /// `dℓ(x_D)` over the motion of `x_B` across the segment, `x_S` fixed: seed eq. 15 as written.
+    fiber_ratio_across: f64,
+    /// Unit direction in which `x_B` moves with `x_S` fixed: the silhouette tangent.
+    silhouette: glam::DVec3,
+    /// `dℓ_t(x_S)/dθ`: seed eq. 20.
+    dl_t_dtheta: f64,
+    /// Unit direction of `∂x_S/∂θ` (the curve `c_t`).
+    c_t: glam::DVec3,
+}
+
+fn measures(m: &MapDerivative) -> Measures {
+    let rows = m.dx_s.map(|r| glam::DVec3::from_array(r));
+    // The kernel of ∂x_S (rank 2): normal to its row space, the best-conditioned cross product of rows.
+    let cands = [
+        rows[0].cross(rows[1]),
+        rows[1].cross(rows[2]),
+        rows[2].cross(rows[0]),
+    ];
+    let k = cands
+        .iter()
+        .copied()
+        .max_by(|a, b| a.length().total_cmp(&b.length()))
+        .unwrap()
+        .normalize();
+    let q1 = k.any_orthonormal_vector();
+    let q2 = k.cross(q1);
+    let area_s = mat_vec(&m.dx_s, q1).cross(mat_vec(&m.dx_s, q2)).length();
+    let fiber_d = mat_vec(&m.dx_d, k).length();
+    let xu = glam::DVec3::new(m.dx_b[0][0], m.dx_b[1][0], m.dx_b[2][0]);
+    let xv = glam::DVec3::new(m.dx_b[0][1], m.dx_b[1][1], m.dx_b[2][1]);
+    let area_b = xu.cross(xv).length();
+    let xb_k = mat_vec(&m.dx_b, k);
+    let fiber_b = xb_k.length();
+    let w = (m.x_b - m.x_s).as_dvec3().normalize();
+    let across_b = (xb_k - w * xb_k.dot(w)).length();
+    let ds_dtheta = glam::DVec3::new(m.dx_s[0][2], m.dx_s[1][2], m.dx_s[2][2]);
+    Measures {
+        area_jacobian: area_s * fiber_d / area_b,
+        fiber_ratio: fiber_d / fiber_b,
+        fiber_ratio_across: fiber_d / across_b,
+        silhouette: xb_k / fiber_b,
+        dl_t_dtheta: ds_dtheta.length(),
+        c_t: ds_dtheta.normalize(),
+    }
+}
+
+/// A random unit vector whose |·ω| is at least `lo` (so the line crosses the receiver clearly).
+fn transverse_unit(rng: &mut Rng, w: glam::Vec3, lo: f32) -> glam::Vec3 {
+    loop {
+        let n = rng.unit();
+        if n.dot(w).abs() >= lo {
+            return n;
+        }
+    }
+}
+
+#[derive(Default, Debug)]
+struct Errors {
+    tested: usize,
+    rejected_concave: usize,
+    area: f64,
+    fiber: f64,
+    fiber_seed15: f64,
+    silhouette_tangent: f64,
+    /// Largest relative deviation of eq. 15 read with the silhouette's arc length (not an error: the
+    /// obliquity `sin α_B`).
+    eq15_vs_arc: f64,
+    dl_t: f64,
+    seed_oblique: f64,
+    /// Largest relative deviation of the literal eq. 23 from the area Jacobian (not an error: the
+    /// obliquity factor).
+    seed_vs_area: f64,
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+/// Runs `count` random silhouette configurations on `shape`; `surface_point` draws a point near the
+/// surface.
+fn check_shape(
+    name: &str,
+    shape: &Shape,
+    count: usize,
+    seed: u64,
+    surface_point: impl Fn(&mut Rng) -> glam::Vec3,
+) -> Errors {
+    let mut rng = Rng(seed);
+    let mut err = Errors::default();
+    while err.tested < count {
+        let x0 = project(shape, surface_point(&mut rng));
+        let n0 = shape.normal(x0);
+        let e1 = n0.any_orthonormal_vector();
+        let e2 = n0.cross(e1);
+        let theta0 = rng.range(0.0, std::f64::consts::TAU);
+        let w0 = e1 * theta0.cos() + e2 * theta0.sin();
+        if !is_silhouette_direction(shape, x0, w0) {
+            err.rejected_concave += 1;
+            continue;
+        }
+        let kn = shape.sdf.normal_curvature(x0 - shape.translate.value(), w0);
+        if kn < 0.05 {
+            // Nearly parabolic: a valid silhouette, but J → 0 and the relative comparison is moot.
+            continue;
+        }
+        let a = rng.range(0.3, 3.0);
+        let b = rng.range(0.3, 3.0);
+        let ps = x0 - w0 * a;
+        let pd = x0 + w0 * b;
+        let recv_s = Receiver::Plane {
+            n: transverse_unit(&mut rng, w0, 0.2),
+            p: ps,
+        };
+        let recv_d = if rng.next() < 0.5 {
+            Receiver::Plane {
+                n: transverse_unit(&mut rng, w0, 0.2),
+                p: pd,
+            }
+        } else {
+            // A sphere entered at pd: outward normal m with m·ω ≤ −0.2.
+            let m = -transverse_unit(&mut rng, w0, 0.2) * 1.0;
+            let m = if m.dot(w0) > 0.0 { -m } else { m };
+            let r = rng.range(0.3, 2.0);
+            Receiver::Sphere { c: pd - m * r, r }
+        };
+        let cfg = Config {
+            x0,
+            n0,
+            e1,
+            e2,
+            theta0,
+            recv_s,
+            recv_d,
+        };
+        let md = eval_map(shape, &cfg);
+        let ms = measures(&md);
+        let seg = BoundarySegment::from_shape(
+            shape,
+            md.x_s,
+            md.x_b,
+            md.x_d,
+            recv_s.normal(md.x_s),
+            recv_d.normal(md.x_d),
+        )
+        .expect("segment");
+        assert!(seg.kappa_n > 0.0);
+        let j = f64::from(boundary_jacobian(&seg));
+        let j_seed = f64::from(seg.seed_jacobian());
+        let fiber = f64::from(primary_measure_change(
+            seg.x_s,
+            seg.x_b,
+            seg.n_b,
+            seg.tangent_b,
+            seg.x_d,
+            seg.n_d,
+        ));
+        // Seed eq. 15 literally: |x_S x_D| / (|x_S x_B| sin θ_D).
+        let fiber15 =
+            f64::from(seg.x_s.distance(seg.x_d) / (seg.x_s.distance(seg.x_b) * seg.sin_theta_d()));
+        let dl_t = f64::from(seg.x_s.distance(seg.x_b) / seg.sin_theta_s());
+        let c_n = seg.n_s.cross(seg.across()).normalize().as_dvec3();
+        let oblique = ms.c_t.cross(c_n).length();
+        let e = [
+            rel(j, ms.area_jacobian),
+            rel(fiber, ms.fiber_ratio),
+            rel(fiber15, ms.fiber_ratio_across),
+            // Silhouette tangent: 1 − |cos| of the angle to the numerical direction.
+            1.0 - ms.silhouette.dot(seg.tangent_b.as_dvec3()).abs(),
+            rel(dl_t, ms.dl_t_dtheta),
+            rel(j_seed * oblique, ms.area_jacobian),
+        ];
+        assert!(
+            e.iter().all(|&e| e < 1e-3),
+            "{name}: config {} relative errors {e:?} (J {j}, numerical {}, κ_n {kn})",
+            err.tested,
+            ms.area_jacobian
+        );
+        err.area = err.area.max(e[0]);
+        err.fiber = err.fiber.max(e[1]);
+        err.fiber_seed15 = err.fiber_seed15.max(e[2]);
+        err.silhouette_tangent = err.silhouette_tangent.max(e[3]);
+        err.dl_t = err.dl_t.max(e[4]);
+        err.seed_oblique = err.seed_oblique.max(e[5]);
+        err.eq15_vs_arc = err.eq15_vs_arc.max(rel(fiber15, ms.fiber_ratio));
+        err.seed_vs_area = err.seed_vs_area.max(rel(j_seed, ms.area_jacobian));
+        err.tested += 1;
+    }
+    eprintln!("{name}: {err:?}");
+    err
+}
+
+#[test]
+fn jacobian_sphere() {
+    let c = glam::Vec3::new(0.2, -0.1, 0.3);
+    let shape = Shape::new("ball", Sdf::sphere(c, 0.8), diffuse());
+    let err = check_shape("sphere", &shape, 300, 1, |rng| c + rng.unit() * 0.8);
+    assert_eq!(err.rejected_concave, 0, "a sphere is convex everywhere");
+    // On a sphere the silhouette is perpendicular to the ray: seed eq. 15 holds with the arc length too.
+    assert!(err.eq15_vs_arc < 1e-3, "{err:?}");
+}
+
+#[test]
+fn jacobian_torus() {
+    let c = glam::Vec3::new(-0.1, 0.2, 0.05);
+    let axis = glam::Vec3::new(0.3, 1.0, 0.2).normalize();
+    let shape = Shape::new("donut", Sdf::torus(c, axis, 1.0, 0.4), diffuse());
+    let err = check_shape("torus", &shape, 300, 2, |rng| {
+        let a = axis.any_orthonormal_vector();
+        let b = axis.cross(a);
+        let (phi, psi) = (
+            rng.range(0.0, std::f64::consts::TAU),
+            rng.range(0.0, std::f64::consts::TAU),
+        );
+        let radial = a * phi.cos() + b * phi.sin();
+        c + radial * (1.0 + 0.4 * psi.cos()) + axis * (0.4 * psi.sin())
+    });
+    assert!(
+        err.rejected_concave > 0,
+        "the torus's inner side has concave directions"
+    );
+    // Obliquity is generic: the literal eq. 23 differs from the area Jacobian somewhere.
+    assert!(err.seed_vs_area > 1e-2, "{err:?}");
+    // The torus's silhouette is oblique to the ray somewhere: eq. 15 needs sin α_B there.
+    assert!(err.eq15_vs_arc > 1e-2, "{err:?}");
+}
+
+#[test]
+fn jacobian_grid() {
+    let c = glam::Vec3::new(0.05, -0.02, 0.1);
+    let sphere = Sdf::sphere(c, 0.8);
+    let (lo, hi) = (glam::Vec3::splat(-1.2), glam::Vec3::splat(1.2));
+    let grid = Sdf::grid(bake(&sphere, lo, hi, 40), lo, hi).unwrap();
+    let shape = Shape::new("baked", grid, diffuse());
+    check_shape("grid", &shape, 300, 3, |rng| c + rng.unit() * 0.8);
+}
+
+/// Degenerate configurations give weight 0, never NaN or infinity.
+#[test]
+fn jacobian_guards() {
+    let shape = Shape::new("ball", Sdf::sphere(glam::Vec3::ZERO, 1.0), diffuse());
+    let x_b = glam::Vec3::new(0.0, 1.0, 0.0);
+    let (x_s, x_d) = (
+        glam::Vec3::new(-2.0, 1.0, 0.0),
+        glam::Vec3::new(3.0, 1.0, 0.0),
+    );
+    let up = glam::Vec3::Y;
+    let tilted = glam::Vec3::new(-1.0, 1.0, 0.0).normalize();
+    let ok = BoundarySegment::from_shape(&shape, x_s, x_b, x_d, tilted, glam::Vec3::X).unwrap();
+    assert!(ok.jacobian() > 0.0 && ok.jacobian().is_finite());
+    // Segment grazing x_S's surface (n_S ⟂ ω) and grazing x_D's surface.
+    let graze_s = BoundarySegment { n_s: up, ..ok };
+    assert_eq!(graze_s.jacobian(), 0.0);
+    let graze_d = BoundarySegment { n_d: up, ..ok };
+    assert_eq!(graze_d.jacobian(), 0.0);
+    assert!(graze_d.curve_normal().is_none());
+    // Concave or flat directions are not silhouettes.
+    let concave = BoundarySegment {
+        kappa_n: -0.5,
+        n_s: glam::Vec3::X,
+        ..ok
+    };
+    assert_eq!(concave.jacobian(), 0.0);
+    assert_eq!(concave.jacobian_directional(), 0.0);
+    let flat = BoundarySegment {
+        kappa_n: 0.0,
+        ..concave
+    };
+    assert_eq!(flat.seed_jacobian(), 0.0);
+    assert!(!is_silhouette_direction(
+        &Shape::new("floor", Sdf::plane(up, 0.0), diffuse()),
+        glam::Vec3::ZERO,
+        glam::Vec3::X
+    ));
+}
