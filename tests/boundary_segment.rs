@@ -214,7 +214,7 @@ struct Measures {
 }
 
 fn measures(m: &MapDerivative) -> Measures {
-    let rows = m.dx_s.map(|r| glam::DVec3::from_array(r));
+    let rows = m.dx_s.map(glam::DVec3::from_array);
     // The kernel of ∂x_S (rank 2): normal to its row space, the best-conditioned cross product of rows.
     let cands = [
         rows[0].cross(rows[1]),

@@ -115,7 +115,12 @@ pub fn is_silhouette_direction(shape: &Shape, x_b: glam::Vec3, omega: glam::Vec3
     let k = shape
         .sdf
         .normal_curvature(x_b - shape.translate.value(), omega);
-    k > 0.0 && k.is_finite()
+    convex(k)
+}
+
+/// `κ_n > 0` and finite: the line is a silhouette (NaN is not).
+fn convex(kappa_n: f32) -> bool {
+    kappa_n > 0.0 && kappa_n.is_finite()
 }
 
 /// Unit tangent at a silhouette point of the silhouette curve for the view direction `omega`: the
@@ -212,7 +217,7 @@ impl BoundarySegment {
     /// The change of measure `dA(x_S) dℓ(x_D) / (dA(x_B) dθ_B)`, eq. (A) of the module notes:
     /// `|x_S x_B| |x_S x_D| κ_n / (|n_S·ω| sin θ_D)`. 0 for a rejected (measure-zero) configuration.
     pub fn jacobian(&self) -> f32 {
-        if !(self.kappa_n > 0.0) {
+        if !convex(self.kappa_n) {
             return 0.0;
         }
         let num = self.x_s.distance(self.x_b) * self.x_s.distance(self.x_d) * self.kappa_n;
@@ -223,7 +228,7 @@ impl BoundarySegment {
     /// change to the oblique measure `dℓ_t(x_S) dℓ_n(x_S) dℓ(x_D)`. Equals [`Self::jacobian`] divided
     /// by `sin∠(c_t, c_n)`; kept for comparison and for the tests, not for estimators.
     pub fn seed_jacobian(&self) -> f32 {
-        if !(self.kappa_n > 0.0) {
+        if !convex(self.kappa_n) {
             return 0.0;
         }
         let num = self.x_s.distance(self.x_b) * self.x_s.distance(self.x_d) * self.kappa_n;
@@ -236,7 +241,7 @@ impl BoundarySegment {
     /// The change of measure when `x_D` is at infinity: `dA(x_S) dψ / (dA(x_B) dθ_B) =
     /// |x_S x_B| κ_n / |n_S·ω|`, `ψ` the angle swept by the direction from `x_S` (`x_d` is not used).
     pub fn jacobian_directional(&self) -> f32 {
-        if !(self.kappa_n > 0.0) {
+        if !convex(self.kappa_n) {
             return 0.0;
         }
         guarded_ratio(self.x_s.distance(self.x_b) * self.kappa_n, self.cos_s())
