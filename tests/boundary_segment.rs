@@ -14,10 +14,11 @@
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::integrator::attach::Grad;
 use implicit_psdr::integrator::boundary::{
-    BoundarySegment, boundary_jacobian, is_silhouette_direction, primary_measure_change,
+    BoundarySegment, boundary_jacobian, boundary_velocity, is_silhouette_direction,
+    primary_measure_change,
 };
 use implicit_psdr::math::Vec3;
-use implicit_psdr::scalar::{DualN, Param3, Scalar};
+use implicit_psdr::scalar::{Dual32, DualN, Param, Param3, Scalar};
 use implicit_psdr::scene::Shape;
 use implicit_psdr::sdf::{Sdf, bake};
 
@@ -476,4 +477,173 @@ fn jacobian_guards() {
         glam::Vec3::ZERO,
         glam::Vec3::X
     ));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// V_∂ by AD against finite differences of the shadow boundary's position.
+
+/// Bisection for the crossing of `blocked` along `s ∈ [lo, hi]` (`blocked(lo)`, `!blocked(hi)`).
+fn crossing(lo: f64, hi: f64, blocked: impl Fn(f64) -> bool) -> f64 {
+    assert!(
+        blocked(lo) && !blocked(hi),
+        "n_∂ must point to the clear side"
+    );
+    let (mut a, mut b) = (lo, hi);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if blocked(m) {
+            a = m
+        } else {
+            b = m
+        }
+        if b - a < 1e-14 {
+            break;
+        }
+    }
+    0.5 * (a + b)
+}
+
+fn seg_sphere_blocked(xs: glam::DVec3, y: glam::DVec3, c: glam::DVec3, r: f64) -> bool {
+    let d = y - xs;
+    let t = ((c - xs).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+    (xs + d * t - c).length() < r
+}
+
+fn slotted(v: f32, slot: u16) -> Param {
+    Param {
+        value: v,
+        slot: Some(slot),
+    }
+}
+
+/// `|a − b| / max(|b|, 1e-2)`: relative, with a floor for velocities near zero.
+fn rel_floor(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-2)
+}
+
+/// A sphere between a floor point `x_S` and a wall: radius, centre, the sphere's translation, the wall
+/// and the floor moving. `V_∂` from one `DualN<4>` pass and from `Dual32` passes against central
+/// differences of the shadow boundary's position along `n_∂` on the wall.
+#[test]
+fn velocity_sphere_shadow() {
+    let c = glam::Vec3::new(0.0, 1.0, 0.0);
+    let r = 0.5f32;
+    let wall_z = -3.0f32;
+    let (up, wall_n) = (glam::Vec3::Y, glam::Vec3::Z);
+    let ball4 = Shape::new(
+        "ball",
+        Sdf::sphere(
+            Param3 {
+                c: [slotted(c.x, 1), slotted(c.y, 2), slotted(c.z, 3)],
+            },
+            slotted(r, 0),
+        ),
+        diffuse(),
+    );
+    let ball_plain = Shape::new("ball", Sdf::sphere(c, r), diffuse());
+    let ball_moved = Shape::translated(
+        "ball",
+        Sdf::sphere(c, r),
+        diffuse(),
+        Param3 {
+            c: [Param::new(0.0), slotted(0.0, 0), Param::new(0.0)],
+        },
+    );
+    let mut rng = Rng(11);
+    let h = 1e-4f64;
+    let mut worst = [0.0f64; 7];
+    let mut tested = 0;
+    while tested < 100 {
+        let xs = glam::Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(0.5, 2.0));
+        let axis = c - xs;
+        let l = axis.length();
+        let a = axis / l;
+        let beta = (r / l).asin();
+        let (u, v) = (
+            a.any_orthonormal_vector(),
+            a.cross(a.any_orthonormal_vector()),
+        );
+        let phi = rng.range(0.0, std::f64::consts::TAU);
+        let w = a * beta.cos() + (u * phi.cos() + v * phi.sin()) * beta.sin();
+        if w.z > -0.15 {
+            continue;
+        }
+        let xb = xs + w * (l * beta.cos());
+        let xd = xs + w * ((wall_z - xs.z) / w.z);
+        let seg = BoundarySegment::from_shape(&ball_plain, xs, xb, xd, up, wall_n).unwrap();
+        let n_curve = seg.curve_normal().unwrap().as_dvec3();
+
+        // AD: four sphere parameters in one pass, and the same with Dual32 one at a time.
+        let v4: DualN<4> = boundary_velocity(&ball4, &seg, Vec3::constant(xs), Vec3::constant(xd));
+        assert_eq!(v4.re, 0.0);
+        for k in 0..4 {
+            let mut one = ball4.clone();
+            if let Sdf::Sphere { center, radius } = &mut one.sdf {
+                radius.slot = (k == 0).then_some(0);
+                for (i, p) in center.c.iter_mut().enumerate() {
+                    p.slot = (k == i + 1).then_some(0);
+                }
+            }
+            let v1: Dual32 = boundary_velocity(&one, &seg, Vec3::constant(xs), Vec3::constant(xd));
+            assert!((v1.eps - v4.eps[k]).abs() <= 1e-6 * v4.eps[k].abs().max(1.0));
+        }
+        let v_translate: Dual32 =
+            boundary_velocity(&ball_moved, &seg, Vec3::constant(xs), Vec3::constant(xd));
+        // Wall and floor moving along their normals: attached x_D and x_S.
+        let p = Dual32::new(0.0, 1.0);
+        let zero = Dual32::new(0.0, 0.0);
+        let xd_moving = Vec3::constant(xd) + Vec3::new(zero, zero, p);
+        let v_wall: Dual32 = boundary_velocity(&ball_plain, &seg, Vec3::constant(xs), xd_moving);
+        let xs_moving = Vec3::constant(xs) + Vec3::new(zero, p, zero);
+        let v_floor: Dual32 = boundary_velocity(&ball_plain, &seg, xs_moving, Vec3::constant(xd));
+
+        // Finite differences in f64: (Δc, Δr, Δwall, Δfloor) ↦ the boundary's position along n_∂.
+        let (xs64, xd64, c64) = (xs.as_dvec3(), xd.as_dvec3(), c.as_dvec3());
+        let pos = |dc: glam::DVec3, dr: f64, dwall: f64, dfloor: f64| {
+            let xs_p = xs64 + glam::DVec3::Y * dfloor;
+            let line0 = xd64 + glam::DVec3::Z * dwall;
+            crossing(-0.2, 0.2, |s| {
+                seg_sphere_blocked(xs_p, line0 + n_curve * s, c64 + dc, f64::from(r) + dr)
+            })
+        };
+        let z3 = glam::DVec3::ZERO;
+        let fd = |f: &dyn Fn(f64) -> f64| (f(h) - f(-h)) / (2.0 * h);
+        let fds = [
+            fd(&|e| pos(z3, e, 0.0, 0.0)),
+            fd(&|e| pos(glam::DVec3::X * e, 0.0, 0.0, 0.0)),
+            fd(&|e| pos(glam::DVec3::Y * e, 0.0, 0.0, 0.0)),
+            fd(&|e| pos(glam::DVec3::Z * e, 0.0, 0.0, 0.0)),
+            fd(&|e| pos(z3, 0.0, e, 0.0)),
+            fd(&|e| pos(z3, 0.0, 0.0, e)),
+        ];
+        let ads = [
+            v4.eps[0],
+            v4.eps[1],
+            v4.eps[2],
+            v4.eps[3],
+            v_wall.eps,
+            v_floor.eps,
+        ]
+        .map(f64::from);
+        for i in 0..6 {
+            let e = rel_floor(ads[i], fds[i]);
+            assert!(
+                e < 1e-3,
+                "config {tested} term {i}: AD {} FD {}",
+                ads[i],
+                fds[i]
+            );
+            worst[i] = worst[i].max(e);
+        }
+        let e = rel_floor(f64::from(v_translate.eps), fds[2]);
+        assert!(
+            e < 1e-3,
+            "translate.y: AD {} FD {}",
+            v_translate.eps,
+            fds[2]
+        );
+        worst[6] = worst[6].max(e);
+        tested += 1;
+    }
+    eprintln!("V_∂ sphere (radius, c.x, c.y, c.z, wall, floor, translate.y): {worst:?}");
 }
