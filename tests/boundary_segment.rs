@@ -647,3 +647,127 @@ fn velocity_sphere_shadow() {
     }
     eprintln!("V_∂ sphere (radius, c.x, c.y, c.z, wall, floor, translate.y): {worst:?}");
 }
+
+/// The torus's implicit function in f64 (as `Sdf::torus`: major radius in the plane across `axis`).
+fn torus64(p: glam::DVec3, c: glam::DVec3, axis: glam::DVec3, big: f64, small: f64) -> f64 {
+    let q = p - c;
+    let y = q.dot(axis);
+    let rho = (q - axis * y).length();
+    (rho - big).hypot(y) - small
+}
+
+/// Minimum of a unimodal `f` on `[a, b]` by golden-section search.
+fn golden_min(mut a: f64, mut b: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..120 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    fc.min(fd)
+}
+
+/// A torus occluder (oblique silhouettes, varying curvature) between tilted planes: both radii and the
+/// centre, from one `DualN<4>` pass, against central differences of the local boundary's position.
+#[test]
+fn velocity_torus_occluder() {
+    let axis = glam::Vec3::new(0.3, 1.0, 0.2).normalize();
+    let (big, small) = (1.0f32, 0.4f32);
+    let torus4 = Shape::new(
+        "donut",
+        Sdf::torus(
+            Param3 {
+                c: [slotted(0.0, 2), Param::new(0.0), slotted(0.0, 3)],
+            },
+            axis,
+            slotted(big, 0),
+            slotted(small, 1),
+        ),
+        diffuse(),
+    );
+    let mut rng = Rng(12);
+    let h = 1e-4f64;
+    let mut worst = [0.0f64; 4];
+    let mut tested = 0;
+    while tested < 100 {
+        let p0 = axis.any_orthonormal_vector();
+        let p1 = axis.cross(p0);
+        let (phi, psi) = (
+            rng.range(0.0, std::f64::consts::TAU),
+            rng.range(0.0, std::f64::consts::TAU),
+        );
+        let radial = p0 * phi.cos() + p1 * phi.sin();
+        let xb = project(
+            &torus4,
+            radial * (big + small * psi.cos()) + axis * (small * psi.sin()),
+        );
+        let n = torus4.normal(xb);
+        let (t0, t1) = (
+            n.any_orthonormal_vector(),
+            n.cross(n.any_orthonormal_vector()),
+        );
+        let th = rng.range(0.0, std::f64::consts::TAU);
+        let w = t0 * th.cos() + t1 * th.sin();
+        if torus4.sdf.normal_curvature(xb, w) < 0.1 {
+            continue;
+        }
+        let xs = xb - w * rng.range(0.5, 2.0);
+        let xd = xb + w * rng.range(0.5, 2.0);
+        let n_s = transverse_unit(&mut rng, w, 0.3);
+        let n_d = transverse_unit(&mut rng, w, 0.3);
+        let seg = BoundarySegment::from_shape(&torus4, xs, xb, xd, n_s, n_d).unwrap();
+        let n_curve = seg.curve_normal().unwrap().as_dvec3();
+        let v4: DualN<4> = boundary_velocity(&torus4, &seg, Vec3::constant(xs), Vec3::constant(xd));
+
+        let (xs64, xd64, ax) = (xs.as_dvec3(), xd.as_dvec3(), axis.as_dvec3());
+        let t_b = f64::from(seg.t_b());
+        let half = 0.15 / (xd64 - xs64).length();
+        let pos = |dc: glam::DVec3, dbig: f64, dsmall: f64| {
+            crossing(-0.05, 0.05, |s| {
+                let y = xd64 + n_curve * s;
+                let m = golden_min(t_b - half, t_b + half, |t| {
+                    torus64(
+                        xs64 + (y - xs64) * t,
+                        dc,
+                        ax,
+                        f64::from(big) + dbig,
+                        f64::from(small) + dsmall,
+                    )
+                });
+                m < 0.0
+            })
+        };
+        let z3 = glam::DVec3::ZERO;
+        let fd = |f: &dyn Fn(f64) -> f64| (f(h) - f(-h)) / (2.0 * h);
+        let fds = [
+            fd(&|e| pos(z3, e, 0.0)),
+            fd(&|e| pos(z3, 0.0, e)),
+            fd(&|e| pos(glam::DVec3::X * e, 0.0, 0.0)),
+            fd(&|e| pos(glam::DVec3::Z * e, 0.0, 0.0)),
+        ];
+        for i in 0..4 {
+            let e = rel_floor(f64::from(v4.eps[i]), fds[i]);
+            assert!(
+                e < 1e-3,
+                "config {tested} term {i}: AD {} FD {}",
+                v4.eps[i],
+                fds[i]
+            );
+            worst[i] = worst[i].max(e);
+        }
+        tested += 1;
+    }
+    eprintln!("V_∂ torus (major, minor, c.x, c.z): {worst:?}");
+}
