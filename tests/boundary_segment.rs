@@ -771,3 +771,116 @@ fn velocity_torus_occluder() {
     }
     eprintln!("V_∂ torus (major, minor, c.x, c.z): {worst:?}");
 }
+
+/// The cubic smooth minimum of `Sdf::smooth_union` in f64 (lowering at most `k/6`).
+fn smin64(a: f64, b: f64, k: f64) -> f64 {
+    let s = (a - b).abs();
+    if s >= k {
+        return a.min(b);
+    }
+    let h = (k - s) / k;
+    a.min(b) - h * h * h * k / 6.0
+}
+
+/// A smooth union of two spheres with `x_B` in the blend, where `|∇φ| ≠ 1`: the rate
+/// `t_B ∇φ(x_B)·n_∂` must use the unnormalised gradient. Parameters `k`, one centre, the other radius
+/// and centre.
+#[test]
+fn velocity_smooth_union_blend() {
+    let (c1, r1) = (glam::Vec3::new(-0.5, 0.0, 0.0), 0.6f32);
+    let (c2, r2) = (glam::Vec3::new(0.5, 0.1, 0.0), 0.5f32);
+    let k = 0.5f32;
+    let blob = Shape::new(
+        "blob",
+        Sdf::smooth_union(
+            vec![
+                Sdf::sphere(
+                    Param3 {
+                        c: [slotted(c1.x, 1), Param::new(c1.y), Param::new(c1.z)],
+                    },
+                    r1,
+                ),
+                Sdf::sphere(
+                    Param3 {
+                        c: [Param::new(c2.x), slotted(c2.y, 3), Param::new(c2.z)],
+                    },
+                    slotted(r2, 2),
+                ),
+            ],
+            slotted(k, 0),
+        ),
+        diffuse(),
+    );
+    let phi64 = |p: glam::DVec3, dk: f64, dc1x: f64, dr2: f64, dc2y: f64| {
+        let a = (p - c1.as_dvec3() - glam::DVec3::X * dc1x).length() - f64::from(r1);
+        let b = (p - c2.as_dvec3() - glam::DVec3::Y * dc2y).length() - f64::from(r2) - dr2;
+        smin64(a, b, f64::from(k) + dk)
+    };
+    let mut rng = Rng(13);
+    let h = 1e-4f64;
+    let mut worst = [0.0f64; 4];
+    let mut grad_dev = 0.0f32;
+    let mut tested = 0;
+    let mut tries = 0;
+    while tested < 60 {
+        tries += 1;
+        assert!(tries < 200_000, "too few blend configurations");
+        let q = glam::Vec3::new(rng.range(-0.2, 0.2), 0.0, 0.0) + rng.unit() * 0.5;
+        let xb = project(&blob, q);
+        let (a, b) = (xb.distance(c1) - r1, xb.distance(c2) - r2);
+        if (a - b).abs() > 0.8 * k {
+            continue;
+        }
+        let n = blob.normal(xb);
+        let (t0, t1) = (
+            n.any_orthonormal_vector(),
+            n.cross(n.any_orthonormal_vector()),
+        );
+        let th = rng.range(0.0, std::f64::consts::TAU);
+        let w = t0 * th.cos() + t1 * th.sin();
+        if blob.sdf.normal_curvature(xb, w) < 0.1 {
+            continue;
+        }
+        let xs = xb - w * rng.range(0.5, 2.0);
+        let xd = xb + w * rng.range(0.5, 2.0);
+        let n_s = transverse_unit(&mut rng, w, 0.3);
+        let n_d = transverse_unit(&mut rng, w, 0.3);
+        let seg = BoundarySegment::from_shape(&blob, xs, xb, xd, n_s, n_d).unwrap();
+        grad_dev = grad_dev.max((seg.grad_b.length() - 1.0).abs());
+        let n_curve = seg.curve_normal().unwrap().as_dvec3();
+        let v4: DualN<4> = boundary_velocity(&blob, &seg, Vec3::constant(xs), Vec3::constant(xd));
+
+        let (xs64, xd64) = (xs.as_dvec3(), xd.as_dvec3());
+        let t_b = f64::from(seg.t_b());
+        let half = 0.1 / (xd64 - xs64).length();
+        let pos = |d: [f64; 4]| {
+            crossing(-0.02, 0.02, |s| {
+                let y = xd64 + n_curve * s;
+                let m = golden_min(t_b - half, t_b + half, |t| {
+                    phi64(xs64 + (y - xs64) * t, d[0], d[1], d[2], d[3])
+                });
+                m < 0.0
+            })
+        };
+        for i in 0..4 {
+            let mut dp = [0.0; 4];
+            dp[i] = h;
+            let mut dm = [0.0; 4];
+            dm[i] = -h;
+            let fd = (pos(dp) - pos(dm)) / (2.0 * h);
+            let e = rel_floor(f64::from(v4.eps[i]), fd);
+            assert!(
+                e < 1e-3,
+                "config {tested} term {i}: AD {} FD {fd}",
+                v4.eps[i]
+            );
+            worst[i] = worst[i].max(e);
+        }
+        tested += 1;
+    }
+    eprintln!("V_∂ smooth union (k, c1.x, r2, c2.y): {worst:?}, max ||∇φ| − 1| {grad_dev}");
+    assert!(
+        grad_dev > 0.05,
+        "the blend must exercise a non-unit gradient"
+    );
+}
