@@ -160,9 +160,11 @@ impl Faces {
 /// Axis-aligned lines run parallel to flat faces (boxes, cylinder caps, planes inside CSG) at every
 /// depth `δ`, and sphere tracing along such a line takes `length/δ` steps: with the renderer's budget
 /// (512) about 0.5% of the lines through a box ran out of steps and lost their later hits, a 0.3% bias
-/// of the area. Every charged step advances at least `eps` (steps below `eps` are rounded up to the creep
-/// step), and each crossing adds at most 7 on-surface probes, so `2 length/eps` (plus a margin) steps
-/// cover any line; the average cost stays small because only lines hugging a face need many.
+/// of the area. Every marching step advances at least `eps` (steps below `eps` are rounded up to the
+/// creep step), so `length/eps` steps cross the whole line; the budget doubles that for the probes after
+/// crossings and grazes (up to 7 each). Only a line lying in the surface to within float noise over a
+/// long stretch (a measure-zero set) can still run out, and is reported. The average cost stays small:
+/// only lines hugging a face need many steps (`length/δ` at depth `δ`, `ln(extent/eps)` on average).
 fn line_settings(settings: &TraceSettings, length: f32) -> TraceSettings {
     let eps = settings.eps.max(f32::MIN_POSITIVE);
     // `as u32` saturates (an absurdly small `eps` gives `u32::MAX`, which still terminates).
