@@ -10,6 +10,7 @@ pub mod derivative;
 pub mod fd;
 pub mod path;
 pub mod shading;
+pub mod surface_sampling;
 
 use crate::camera::CameraFrame;
 use crate::film::Image;
