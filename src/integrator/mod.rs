@@ -11,6 +11,7 @@ pub mod derivative;
 pub mod fd;
 pub mod path;
 pub mod shading;
+pub mod surface_sampling;
 
 use crate::camera::CameraFrame;
 use crate::film::Image;
