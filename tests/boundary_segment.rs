@@ -202,6 +202,8 @@ fn mat_vec(m: &[[f64; 3]; 3], k: glam::DVec3) -> glam::DVec3 {
 struct Measures {
     /// `dA(x_S) dℓ(x_D) / (dA(x_B) dθ)`.
     area_jacobian: f64,
+    /// `dA(x_S) dψ / (dA(x_B) dθ)`, `ψ` the angle swept by the direction from `x_S` (x_D at infinity).
+    directional_jacobian: f64,
     /// `dℓ(x_D)/dℓ(x_B)` with `x_S` fixed (the silhouette's arc length at `x_B`): seed eq. 15.
     fiber_ratio: f64,
     /// `dℓ(x_D)` over the motion of `x_B` across the segment, `x_S` fixed: seed eq. 15 as written.
@@ -231,7 +233,11 @@ fn measures(m: &MapDerivative) -> Measures {
     let q1 = k.any_orthonormal_vector();
     let q2 = k.cross(q1);
     let area_s = mat_vec(&m.dx_s, q1).cross(mat_vec(&m.dx_s, q2)).length();
-    let fiber_d = mat_vec(&m.dx_d, k).length();
+    let xd_k = mat_vec(&m.dx_d, k);
+    let fiber_d = xd_k.length();
+    let sd = (m.x_d - m.x_s).as_dvec3();
+    let dir = sd.normalize();
+    let dpsi = (xd_k - dir * xd_k.dot(dir)).length() / sd.length();
     let xu = glam::DVec3::new(m.dx_b[0][0], m.dx_b[1][0], m.dx_b[2][0]);
     let xv = glam::DVec3::new(m.dx_b[0][1], m.dx_b[1][1], m.dx_b[2][1]);
     let area_b = xu.cross(xv).length();
@@ -242,6 +248,7 @@ fn measures(m: &MapDerivative) -> Measures {
     let ds_dtheta = glam::DVec3::new(m.dx_s[0][2], m.dx_s[1][2], m.dx_s[2][2]);
     Measures {
         area_jacobian: area_s * fiber_d / area_b,
+        directional_jacobian: area_s * dpsi / area_b,
         fiber_ratio: fiber_d / fiber_b,
         fiber_ratio_across: fiber_d / across_b,
         silhouette: xb_k / fiber_b,
@@ -273,6 +280,7 @@ struct Errors {
     eq15_vs_arc: f64,
     dl_t: f64,
     seed_oblique: f64,
+    directional: f64,
     /// Largest relative deviation of the literal eq. 23 from the area Jacobian (not an error: the
     /// obliquity factor).
     seed_vs_area: f64,
@@ -374,6 +382,10 @@ fn check_shape(
             1.0 - ms.silhouette.dot(seg.tangent_b.as_dvec3()).abs(),
             rel(dl_t, ms.dl_t_dtheta),
             rel(j_seed * oblique, ms.area_jacobian),
+            rel(
+                f64::from(seg.jacobian_directional()),
+                ms.directional_jacobian,
+            ),
         ];
         assert!(
             e.iter().all(|&e| e < 1e-3),
@@ -387,6 +399,7 @@ fn check_shape(
         err.silhouette_tangent = err.silhouette_tangent.max(e[3]);
         err.dl_t = err.dl_t.max(e[4]);
         err.seed_oblique = err.seed_oblique.max(e[5]);
+        err.directional = err.directional.max(e[6]);
         err.eq15_vs_arc = err.eq15_vs_arc.max(rel(fiber15, ms.fiber_ratio));
         err.seed_vs_area = err.seed_vs_area.max(rel(j_seed, ms.area_jacobian));
         err.tested += 1;
