@@ -1,25 +1,14 @@
 //! The command-line tool: bad inputs exit with code 2, a one-line `error:` naming the field, and no
 //! output file; a tiny render writes both images.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_implicit-psdr");
+use common::{assert_failure, npy_bytes, outputs, run};
+use std::path::PathBuf;
 
 /// A fresh, empty working folder for one test.
 fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("psdr-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run implicit-psdr")
+    common::workdir("cli", name)
 }
 
 /// A tiny valid scene as JSON text, with `edit` applied to it.
@@ -36,15 +25,6 @@ fn scene(edit: impl FnOnce(&mut serde_json::Value)) -> String {
     });
     edit(&mut v);
     v.to_string()
-}
-
-/// Files in `dir` other than the inputs named.
-fn outputs(dir: &Path, inputs: &[&str]) -> Vec<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| !inputs.contains(&n.as_str()))
-        .collect()
 }
 
 /// Runs `render scene.json` on `text` and checks for a clean failure mentioning `expected`.
@@ -65,16 +45,6 @@ fn assert_render_fails(name: &str, text: &str, extra: &[(&str, &[u8])], expected
         "output files created"
     );
     std::fs::remove_dir_all(&dir).unwrap();
-}
-
-#[track_caller]
-fn assert_failure(out: &Output, expected: &str) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.starts_with("error: "), "stderr: {stderr:?}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr:?}");
-    assert!(stderr.contains(expected), "{stderr:?} lacks {expected:?}");
-    assert!(!stderr.contains("panicked"), "stderr: {stderr:?}");
 }
 
 #[test]
@@ -151,23 +121,11 @@ fn non_finite_numbers() {
 
 /// A version-1 `.npy` file with the given dtype descriptor and shape, zero-filled.
 fn npy(descr: &str, shape: &[usize], item: usize) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
-    let shape_str = if shape.len() == 1 {
-        format!("({},)", dims[0])
-    } else {
-        format!("({})", dims.join(", "))
-    };
-    let mut header =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_str}, }}");
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    bytes.resize(bytes.len() + item * shape.iter().product::<usize>(), 0);
-    bytes
+    npy_bytes(
+        descr,
+        shape,
+        &vec![0; item * shape.iter().product::<usize>()],
+    )
 }
 
 #[test]

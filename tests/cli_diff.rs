@@ -3,25 +3,15 @@
 //! stderr, no output file) on bad inputs.
 
 use implicit_psdr::film;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_implicit-psdr");
+use common::{assert_failure, outputs, run};
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 /// A fresh, empty working folder for one test.
 fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("psdr-cli-diff-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run implicit-psdr")
+    common::workdir("cli-diff", name)
 }
 
 #[track_caller]
@@ -32,27 +22,6 @@ fn assert_success(out: &Output) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-#[track_caller]
-fn assert_failure(out: &Output, expected: &str) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.starts_with("error: "), "stderr: {stderr:?}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr:?}");
-    assert!(stderr.contains(expected), "{stderr:?} lacks {expected:?}");
-    assert!(!stderr.contains("panicked"), "stderr: {stderr:?}");
-}
-
-/// Files in `dir` other than the inputs named, sorted.
-fn outputs(dir: &Path, inputs: &[&str]) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| !inputs.contains(&n.as_str()))
-        .collect();
-    names.sort();
-    names
 }
 
 /// The default scene (`scenes/sphere_floor.json`) at 16×16 pixels, 4 spp, with `edit` applied, written

@@ -1,6 +1,8 @@
 //! Scene parsing: the example scenes parse into the expected rendering types, and each class of bad
 //! input gives an error naming the offending field (never a panic).
 
+mod common;
+
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
@@ -530,29 +532,7 @@ fn load_names_the_file() {
 
 /// Writes a version-1 `.npy` file with the given dtype descriptor, shape and raw little-endian data.
 fn write_npy(path: &Path, descr: &str, shape: &[usize], data: &[u8]) {
-    let shape_str = match shape {
-        [n] => format!("({n},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(|n| n.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let mut header =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_str}, }}");
-    // Pad so that magic (6) + version (2) + length (2) + header is a multiple of 64, ending in '\n'.
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    bytes.extend_from_slice(data);
-    std::fs::write(path, bytes).unwrap();
+    std::fs::write(path, common::npy_bytes(descr, shape, data)).unwrap();
 }
 
 fn sphere_grid_bytes(n: usize) -> Vec<u8> {

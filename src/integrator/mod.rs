@@ -6,11 +6,13 @@
 //! exactly from the pixel filter, so every sample's filter weight over its density is 1.
 
 pub mod attach;
+pub mod boundary;
 pub mod derivative;
 pub mod fd;
 pub mod path;
 pub mod shading;
 pub mod silhouette_boxes;
+pub mod surface_sampling;
 
 use crate::camera::CameraFrame;
 use crate::film::Image;

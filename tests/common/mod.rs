@@ -1,0 +1,70 @@
+//! Helpers shared by the integration tests that run the command-line tool or write input files.
+
+// Each test crate uses a different subset of these helpers.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The tool under test.
+pub const BIN: &str = env!("CARGO_BIN_EXE_implicit-psdr");
+
+/// A fresh, empty working folder for one test (`prefix` keeps test crates apart).
+pub fn workdir(prefix: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("psdr-{prefix}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the tool with `args` in `dir`.
+pub fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run implicit-psdr")
+}
+
+/// A clean failure: exit code 2 and exactly one line `error: ...` on stderr mentioning `expected`.
+#[track_caller]
+pub fn assert_failure(out: &Output, expected: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.starts_with("error: "), "stderr: {stderr:?}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr:?}");
+    assert!(stderr.contains(expected), "{stderr:?} lacks {expected:?}");
+    assert!(!stderr.contains("panicked"), "stderr: {stderr:?}");
+}
+
+/// Files in `dir` other than the inputs named, sorted.
+pub fn outputs(dir: &Path, inputs: &[&str]) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !inputs.contains(&n.as_str()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// A version-1 `.npy` file with the given dtype descriptor, shape and raw little-endian data.
+pub fn npy_bytes(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
+    let shape_str = match shape {
+        [n] => format!("({n},)"),
+        _ => format!("({})", dims.join(", ")),
+    };
+    let mut header =
+        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_str}, }}");
+    // Pad so that magic (6) + version (2) + length (2) + header is a multiple of 64, ending in '\n'.
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.extend_from_slice(data);
+    bytes
+}
