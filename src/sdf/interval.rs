@@ -13,15 +13,20 @@
 //!   the derivative the hull of both branches' derivatives (a superset of the Clarke generalised gradient,
 //!   so it holds every gradient where one exists).
 //! - `primal()` returns the midpoint. It is only used for branching, and the node code that branches on a
-//!   value that depends on the point has been made sound: the smooth minimum's early exit is skipped for
-//!   enclosures ([`is_enclosure`]) and grids take a dedicated path ([`grid_dispatch`]), since a box can span
-//!   several B-spline cells. The other primal branches in `src/sdf` test parameters only (constants here).
+//!   value that depends on the point has been made sound: the smooth minimum (its early exit outside the
+//!   blend) and grids (which cell, inside the grid box or not: a box can span several cells and faces)
+//!   hand interval types to dedicated enclosures here (`smin_dispatch`, `grid_dispatch`; a `TypeId` test
+//!   that folds to a constant, so `f32` and the duals run exactly the code they ran before). The other
+//!   primal branches in `src/sdf` test parameters only (the capsule's `|b − a|² > 0`, a transform's angle
+//!   and scale), which are exact constants here.
 //! - `detach` keeps the interval (the default would collapse it to the midpoint).
 //!
 //! Grids: over a box spanning several cells the spline is enclosed by its control points (B-splines are
 //! convex combinations of them; the partial `∂_a φ` likewise of the differences `(c_{i+1} − c_i)/h_a`,
-//! see `grid.rs`). Within one cell the cell's polynomial is also evaluated in interval arithmetic (tighter
-//! for boxes smaller than a cell) and the two enclosures are intersected.
+//! see `grid.rs`): loose, a few cells wide. A box touching at most 3 cells per axis is also bounded cell by
+//! cell by the Bernstein coefficients of each cell's tricubic over the part of the box in it (blossoming;
+//! computed in `f64` with a rigorous rounding margin), which converge as `O(w²)` in the box width `w`; the
+//! pieces are hulled and intersected with the control-point bound.
 //!
 //! Singular derivatives become unbounded rather than wrong: `safe_sqrt` of an interval touching 0 has a
 //! derivative enclosure `[0, ∞)·x'`, e.g. the gradient of `|p − c|` over a box holding `c`.
@@ -965,8 +970,8 @@ pub(super) fn grid_enclosure<E: Enclosure>(
     spline_enclosure(data, bmin, bmax, q) + d.length()
 }
 
-/// Enclosure of the B-spline over the box `q` (inside the grid box): control-point hull, intersected with
-/// the cell polynomial when the box lies in one cell.
+/// Enclosure of the B-spline over the box `q` (inside the grid box): the control-point hull, intersected
+/// with the per-cell Bernstein bounds when the box touches at most [`MAX_CELL_PIECES`] cells (module notes).
 fn spline_enclosure<E: Enclosure>(
     data: &GridData,
     bmin: glam::Vec3,
