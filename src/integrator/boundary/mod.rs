@@ -5,6 +5,7 @@
 //! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
 //! normal velocity `V_∂` of the discontinuity curve by AD.
 
+pub mod secondary;
 pub mod segment;
 
 pub use segment::{
