@@ -8,7 +8,9 @@ use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::{Filter, Image};
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
 use implicit_psdr::integrator::derivative::Normalization;
-use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives};
+use implicit_psdr::integrator::derivative::{
+    DiffOptions, render_derivatives, render_derivatives_with_secondary,
+};
 use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::math::Ray;
@@ -150,8 +152,19 @@ fn terms(name: &str, h: f32, spp: u32, boundary: u64, fd_spp: u32) -> [Vec<f64>;
     let mut scene = shadow_scene();
     scene.select_parameters(&[name.to_string()]).unwrap();
     let opts = diff_options(spp, 7);
-    let interior = render_derivatives(&scene, 1, &opts).unwrap().interior[0].clone();
-    let secondary = render_secondary(&scene, 1, &opts, boundary).unwrap()[0].clone();
+    let out = render_derivatives_with_secondary(&scene, 1, &opts, boundary).unwrap();
+    let plain = render_derivatives(&scene, 1, &opts).unwrap();
+    assert_eq!(out.interior, plain.interior);
+    assert!(plain.secondary.is_empty());
+    assert_eq!(
+        out.secondary,
+        render_secondary(&scene, 1, &opts, boundary).unwrap()
+    );
+    let total = out.total();
+    let (interior, secondary) = (out.interior[0].clone(), out.secondary[0].clone());
+    for ((t, i), s) in total[0].rgb.iter().zip(&interior.rgb).zip(&secondary.rgb) {
+        assert_eq!(*t, i + s);
+    }
     let fd = finite_difference(
         &shadow_scene(),
         name,
@@ -249,6 +262,13 @@ fn lone_sphere_has_no_secondary_term() {
             .select_parameters(&["ball.radius".into(), "ball.center.x".into()])
             .unwrap();
         let out = render_secondary(&scene, 2, &diff_options(1, 3), 50_000).unwrap();
+        let plain = render_derivatives(&scene, 2, &diff_options(2, 3)).unwrap();
+        assert!(plain.secondary.is_empty());
+        assert_eq!(plain.total(), plain.interior);
+        let with =
+            render_derivatives_with_secondary(&scene, 2, &diff_options(2, 3), 5_000).unwrap();
+        assert_eq!(with.interior, plain.interior);
+        assert_eq!(with.total(), plain.interior);
         assert_eq!(out.len(), 2);
         for image in &out {
             assert!(image.rgb.iter().all(|&v| v == 0.0));
