@@ -67,6 +67,10 @@ pub struct DerivativeImages {
     pub image: Image,
     /// `interior[k]`: interior term of the derivative with respect to the parameter in slot `k`.
     pub interior: Vec<Image>,
+    /// `secondary[k]`: the secondary boundary term (shadows, [`super::boundary::secondary`]) for slot
+    /// `k`; empty when it was not computed ([`render_derivatives`] leaves it empty,
+    /// [`render_derivatives_with_secondary`] fills it).
+    pub secondary: Vec<Image>,
     /// Counters.
     pub stats: RenderStats,
 }
@@ -159,8 +163,40 @@ pub fn render_derivatives_in<S: Directions>(
     Ok(DerivativeImages {
         image: image.unwrap_or_else(|| Image::new(scene.camera.width, scene.camera.height)),
         interior,
+        secondary: Vec::new(),
         stats,
     })
+}
+
+/// [`render_derivatives`] plus the secondary boundary term with `boundary_samples` boundary samples for
+/// the whole image ([`super::boundary::secondary::render_secondary`], same seed). Errors as both; the
+/// secondary term exists for the `direct` integrator only.
+pub fn render_derivatives_with_secondary(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    boundary_samples: u64,
+) -> Result<DerivativeImages> {
+    let start = std::time::Instant::now();
+    let mut out = render_derivatives(scene, count, options)?;
+    out.secondary =
+        super::boundary::secondary::render_secondary(scene, count, options, boundary_samples)?;
+    out.stats.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+impl DerivativeImages {
+    /// The derivative images computed so far: `interior[k] + secondary[k]` (the interior alone where
+    /// the secondary term was not computed). Still missing: the primary boundary term.
+    pub fn total(&self) -> Vec<Image> {
+        let mut total = self.interior.clone();
+        for (t, s) in total.iter_mut().zip(&self.secondary) {
+            for (a, b) in t.rgb.iter_mut().zip(&s.rgb) {
+                *a += b;
+            }
+        }
+        total
+    }
 }
 
 /// One pass: the image and the derivatives in directions `0..width` of `S`.

@@ -3,8 +3,10 @@
 //!
 //! [`segment`] holds the geometry of one boundary segment `(x_S, x_B, x_D)`: the measure changes
 //! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
-//! normal velocity `V_∂` of the discontinuity curve by AD.
+//! normal velocity `V_∂` of the discontinuity curve by AD. [`secondary`] estimates the secondary
+//! boundary term (shadows) of the `direct` integrator with them.
 
+pub mod secondary;
 pub mod segment;
 
 pub use segment::{
