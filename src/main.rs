@@ -7,8 +7,10 @@
 use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use implicit_psdr::film::{Image, colormap};
-use implicit_psdr::integrator::derivative::{DiffOptions, Normalization, render_derivatives};
-use implicit_psdr::integrator::{self, RenderOptions, fd};
+use implicit_psdr::integrator::derivative::{
+    DiffOptions, Normalization, render_derivatives, render_derivatives_with_secondary,
+};
+use implicit_psdr::integrator::{self, IntegratorKind, RenderOptions, fd};
 use implicit_psdr::{compare, film, scene, sdf};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -76,9 +78,12 @@ enum Command {
         /// Seed of the deterministic sampler.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Also write each term of the derivative (`d_interior.P.R|G|B`).
+        /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_secondary.P.R|G|B`).
         #[arg(long)]
         terms: bool,
+        /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it.
+        #[arg(long, default_value_t = DEFAULT_SPP_SECONDARY)]
+        spp_secondary: u32,
         /// Pixel normalisation: `fixed` (the filter-weight sum is a constant) or `differentiable`.
         #[arg(long, value_enum, default_value_t = NormalizationArg::Fixed)]
         normalization: NormalizationArg,
@@ -209,6 +214,7 @@ fn run(cli: Cli) -> Result<()> {
             spp,
             seed,
             terms,
+            spp_secondary,
             normalization,
             out,
             png,
@@ -218,6 +224,7 @@ fn run(cli: Cli) -> Result<()> {
             spp,
             seed,
             terms,
+            spp_secondary,
             normalization.into(),
             &out,
             &png,
@@ -402,9 +409,15 @@ fn params(scene_path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// What `diff` says about the terms it computes, until the boundary terms exist.
+/// Default boundary samples per pixel of the secondary term (`diff --spp-secondary`).
+const DEFAULT_SPP_SECONDARY: u32 = 64;
+
+/// What `diff` says about the terms it computes, until every boundary term exists.
+const WITH_SECONDARY_NOTE: &str = "note: derivatives hold the interior and secondary (shadow) terms; \
+     the primary (silhouette) term is not computed yet, so d.P is incomplete where silhouettes move";
 const INTERIOR_ONLY_NOTE: &str = "note: derivatives hold the interior term only; boundary (silhouette \
-     and shadow) terms are not computed yet";
+     and shadow) terms are not computed (the secondary term exists for the direct integrator, with \
+     --spp-secondary > 0)";
 
 /// The PNG of a derivative command: the image beside one colour-mapped panel per derivative. Returns it
 /// with each panel's colour scale.
@@ -432,6 +445,7 @@ fn diff(
     spp: Option<u32>,
     seed: u64,
     terms: bool,
+    spp_secondary: u32,
     normalization: Normalization,
     out: &Path,
     png: &Path,
@@ -448,7 +462,18 @@ fn diff(
         render: render_options(&scene, spp, seed),
         normalization,
     };
-    let result = render_derivatives(&scene, params.len(), &options)?;
+    let with_secondary = spp_secondary > 0 && scene.integrator == IntegratorKind::Direct;
+    let result = if with_secondary {
+        let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+        render_derivatives_with_secondary(
+            &scene,
+            params.len(),
+            &options,
+            spp_secondary as u64 * pixels,
+        )?
+    } else {
+        render_derivatives(&scene, params.len(), &options)?
+    };
     if result.interior.len() != params.len() {
         bail!(
             "internal error: {} derivative images for {} parameters",
@@ -459,20 +484,28 @@ fn diff(
     let image = &result.image;
 
     let mut channels = rgb_channels("", image);
-    // Until the boundary terms exist, the derivative is its interior term.
-    for (p, d) in params.iter().zip(&result.interior) {
+    // The derivative is the sum of the terms computed so far (no primary boundary term yet).
+    let total = result.total();
+    for (p, d) in params.iter().zip(&total) {
         channels.extend(rgb_channels(&format!("d.{p}."), d));
     }
     if terms {
         for (p, d) in params.iter().zip(&result.interior) {
             channels.extend(rgb_channels(&format!("d_interior.{p}."), d));
         }
+        for (p, d) in params.iter().zip(&result.secondary) {
+            channels.extend(rgb_channels(&format!("d_secondary.{p}."), d));
+        }
     }
-    let derivatives: Vec<&Image> = result.interior.iter().collect();
+    let derivatives: Vec<&Image> = total.iter().collect();
     let (picture, scales) = derivative_picture(image, &derivatives);
     write_outputs(out, png, image, &channels, &picture)?;
 
-    println!("{INTERIOR_ONLY_NOTE}");
+    if with_secondary {
+        println!("{WITH_SECONDARY_NOTE}");
+    } else {
+        println!("{INTERIOR_ONLY_NOTE}");
+    }
     println!(
         "rendered {}x{} and {} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
         image.width,

@@ -127,7 +127,7 @@ fn diff_writes_the_promised_channels() {
     );
     let stdout = assert_success(&out);
     assert!(
-        stdout.contains("note: derivatives hold the interior term only"),
+        stdout.contains("note: derivatives hold the interior and secondary (shadow) terms"),
         "{stdout}"
     );
     assert!(
@@ -146,7 +146,7 @@ fn diff_writes_the_promised_channels() {
     // The image and two panels, 4 pixels apart.
     assert_eq!(png_size(&dir.join("diff.png")), (3 * 16 + 2 * 4, 16));
 
-    // --terms adds the interior term under its own name; other file names.
+    // --terms adds each term under its own name; other file names.
     let out = run(
         &dir,
         &[
@@ -169,10 +169,44 @@ fn diff_writes_the_promised_channels() {
         rgb(""),
         rgb("d.ball.radius."),
         rgb("d_interior.ball.radius."),
+        rgb("d_secondary.ball.radius."),
     ]
     .concat();
     assert_eq!(names, sorted(expected));
     assert_eq!(png_size(&dir.join("t.png")), (2 * 16 + 4, 16));
+
+    // Without boundary samples the derivative is the interior term, and the command says so.
+    let out = run(
+        &dir,
+        &[
+            "diff",
+            "scene.json",
+            "--param",
+            "ball.radius",
+            "--spp",
+            "1",
+            "--terms",
+            "--spp-secondary",
+            "0",
+            "--out",
+            "i.exr",
+            "--png",
+            "i.png",
+        ],
+    );
+    let stdout = assert_success(&out);
+    assert!(
+        stdout.contains("note: derivatives hold the interior term only"),
+        "{stdout}"
+    );
+    let (_, _, names) = exr_channels(&dir.join("i.exr"));
+    let expected = [
+        rgb(""),
+        rgb("d.ball.radius."),
+        rgb("d_interior.ball.radius."),
+    ]
+    .concat();
+    assert_eq!(names, sorted(expected));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
