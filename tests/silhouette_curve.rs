@@ -67,11 +67,12 @@ fn residuals(shape: &Shape, eye: Vec3, curve: &SilhouetteCurve) -> (f32, f32) {
     })
 }
 
-fn assert_closed(curve: &SilhouetteCurve, what: &str) {
+/// Every vertex has two segments; at most `unresolved` boxes were skipped.
+fn assert_closed(curve: &SilhouetteCurve, what: &str, unresolved: usize) {
     let degrees = curve.degrees();
     let bad: Vec<_> = degrees.iter().filter(|&&d| d != 2).collect();
     assert!(
-        bad.is_empty() && curve.stats.unresolved_boxes == 0,
+        bad.is_empty() && curve.stats.unresolved_boxes <= unresolved,
         "{what}: {} vertices of degree ≠ 2 ({:?}), stats {:?}",
         bad.len(),
         &bad[..bad.len().min(10)],
@@ -106,7 +107,7 @@ fn sphere_silhouette_is_the_closed_form_circle_and_its_length_converges() {
                 "vertex {x} off the circle's plane"
             );
         }
-        assert_closed(&curve, "sphere");
+        assert_closed(&curve, "sphere", 0);
         let length = curve.polyline_length();
         let err = (length - exact) / exact;
         println!(
@@ -147,7 +148,7 @@ fn sphere_samples_are_uniform_by_length_with_exact_density() {
         },
     )
     .unwrap();
-    assert_closed(&curve, "coarse sphere");
+    assert_closed(&curve, "coarse sphere", 0);
     let polyline = curve.polyline_length();
     let mut rng = Rng::new(7);
     let n = 200_000;
@@ -202,31 +203,41 @@ fn torus_scene() -> (Shape, Vec3) {
     (shape, Vec3::new(0.6, 1.9, 2.7))
 }
 
-#[test]
-fn oblique_torus_curve_is_closed_on_both_zero_sets_and_converges() {
-    let (shape, eye) = torus_scene();
+/// Extracts at depths 4, 5, 6: every vertex on both zero sets, the polyline closed, the length increasing
+/// with differences shrinking, and the sampling estimator `E[1/pdf]` equal to the Richardson extrapolation.
+/// Returns the lengths.
+fn check_convergence(name: &str, shape: &Shape, eye: Vec3, unresolved: usize) -> Vec<f64> {
     let mut lengths = Vec::new();
     let mut last = None;
     for depth in [4, 5, 6] {
-        let curve = extract_silhouette(&shape, eye, &options(depth)).unwrap();
-        let (phi, psi) = residuals(&shape, eye, &curve);
+        let curve = extract_silhouette(shape, eye, &options(depth)).unwrap();
+        let (phi, psi) = residuals(shape, eye, &curve);
         println!(
-            "torus depth {depth}: {} segments, L = {:.7}, max |φ| {phi:.1e}, max |ψ|/(|∇φ||c−x|) {psi:.1e}, {:?}",
+            "{name} depth {depth}: {} segments, L = {:.7}, max |φ| {phi:.1e}, max |ψ|/(|∇φ||c−x|) {psi:.1e}, {:?}",
             curve.segments.len(),
             curve.polyline_length(),
             curve.stats
         );
-        assert!(phi < 1e-5 && psi < 1e-5, "depth {depth}: {phi} {psi}");
-        assert_closed(&curve, "torus");
+        assert!(
+            phi < 1e-5 && psi < 1e-5,
+            "{name} depth {depth}: {phi} {psi}"
+        );
+        assert_closed(&curve, name, unresolved);
         lengths.push(curve.polyline_length());
         last = Some(curve);
     }
     let d1 = lengths[1] - lengths[0];
     let d2 = lengths[2] - lengths[1];
     // Chords shorten the curve: lengths increase with depth, differences shrink about ×4 per level.
-    println!("torus length differences {d1:.3e}, {d2:.3e}");
-    assert!(d1 > 0.0 && d2 > 0.0, "lengths not increasing: {lengths:?}");
-    assert!(d2 < d1 / 2.5, "differences do not shrink: {d1} {d2}");
+    println!("{name} length differences {d1:.3e}, {d2:.3e}");
+    assert!(
+        d1 > 0.0 && d2 > 0.0,
+        "{name}: lengths not increasing: {lengths:?}"
+    );
+    assert!(
+        d2 < d1 / 2.5,
+        "{name}: differences do not shrink: {d1} {d2}"
+    );
     // Richardson: with error ∝ h², L∞ ≈ L6 + d2/3; the sampling estimator of the true length agrees with it.
     let extrapolated = lengths[2] + d2 / 3.0;
     let curve = last.unwrap();
@@ -242,9 +253,45 @@ fn oblique_torus_curve_is_closed_on_both_zero_sets_and_converges() {
     }
     let mean = s1 / n as f64;
     let sd = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
-    println!("torus: Richardson {extrapolated:.7}, E[1/pdf] = {mean:.7} ± {sd:.1e}");
+    println!("{name}: Richardson {extrapolated:.7}, E[1/pdf] = {mean:.7} ± {sd:.1e}");
     assert!(
         (mean - extrapolated).abs() < 4.0 * sd + 1e-5 * extrapolated,
-        "E[1/pdf] {mean} ± {sd} vs Richardson {extrapolated}"
+        "{name}: E[1/pdf] {mean} ± {sd} vs Richardson {extrapolated}"
+    );
+    lengths
+}
+
+#[test]
+fn oblique_torus_curve_is_closed_on_both_zero_sets_and_converges() {
+    let (shape, eye) = torus_scene();
+    check_convergence("torus", &shape, eye, 0);
+}
+
+#[test]
+fn smooth_union_curve_is_closed_and_converges() {
+    let blend = Sdf::smooth_union(
+        vec![
+            Sdf::sphere([-0.5, 0.0, 0.0], 0.6),
+            Sdf::sphere([0.5, 0.1, 0.0], 0.5),
+        ],
+        0.3,
+    );
+    let eye = Vec3::new(0.7, 0.4, 2.8).normalize() * 3.0;
+    check_convergence("smooth union", &shape_at(blend, Vec3::ZERO), eye, 0);
+}
+
+#[test]
+fn grid_sphere_curve_is_closed_and_converges() {
+    use implicit_psdr::sdf::bake;
+    let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
+    let grid = Sdf::grid(bake(&Sdf::sphere([0.0; 3], 1.0), lo, hi, 48), lo, hi).unwrap();
+    let (shape, eye, _) = sphere_scene();
+    let shape = shape_at(grid, shape.translate.value());
+    let lengths = check_convergence("grid sphere", &shape, eye, 0);
+    // Trilinear interpolation of the baked distance: close to the analytic circle, not equal to it.
+    let exact = 2.0 * PI * (R * (1.0 - R * R / (D * D)).sqrt()) as f64;
+    assert!(
+        (lengths[2] - exact).abs() < 5e-3 * exact,
+        "{lengths:?} vs {exact}"
     );
 }
