@@ -246,7 +246,7 @@ fn check_convergence(name: &str, shape: &Shape, eye: Vec3, unresolved: usize) ->
     let (mut s1, mut s2) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let s = curve
-            .sample(&shape, [rng.f32(), rng.f32()])
+            .sample(shape, [rng.f32(), rng.f32()])
             .expect("projection");
         s1 += 1.0 / s.pdf;
         s2 += 1.0 / (s.pdf * s.pdf);
