@@ -12,6 +12,7 @@ pub mod fd;
 pub mod path;
 pub mod shading;
 pub mod silhouette_boxes;
+pub mod silhouette_curve;
 pub mod surface_sampling;
 
 use crate::camera::CameraFrame;

@@ -1,0 +1,297 @@
+//! Silhouette curve extraction and sampling: a sphere seen from a finite distance (the silhouette is a circle
+//! of radius `r·sqrt(1 − r²/d²)`), a torus seen obliquely (both zero sets, closed polyline, converging length),
+//! and sampling by length (flat angle histogram, `E[1/pdf]` = the true length).
+
+use glam::Vec3;
+use implicit_psdr::Param3;
+use implicit_psdr::bsdf::Bsdf;
+use implicit_psdr::integrator::silhouette_curve::{
+    CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
+};
+use implicit_psdr::scene::Shape;
+use implicit_psdr::sdf::Sdf;
+use std::f64::consts::PI;
+
+/// Deterministic xorshift64* generator.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+fn shape_at(sdf: Sdf, translate: Vec3) -> Shape {
+    Shape::translated(
+        "s",
+        sdf,
+        Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        },
+        Param3::from(translate),
+    )
+}
+
+const R: f32 = 1.0;
+const D: f32 = 3.0;
+
+/// A unit sphere at `centre` (via the shape's translation) and an eye at distance `D` in a generic direction.
+fn sphere_scene() -> (Shape, Vec3, Vec3) {
+    let centre = Vec3::new(0.1, -0.2, 0.05);
+    let shape = shape_at(Sdf::sphere([0.0; 3], R), centre);
+    let eye = centre + Vec3::new(0.7, 0.4, 2.8).normalize() * D;
+    (shape, eye, centre)
+}
+
+fn options(depth: u32) -> CurveOptions {
+    CurveOptions {
+        max_depth: depth,
+        ..Default::default()
+    }
+}
+
+/// Largest `|φ|` and `|ψ|/(|∇φ||c − x|)` over the vertices.
+fn residuals(shape: &Shape, eye: Vec3, curve: &SilhouetteCurve) -> (f32, f32) {
+    curve.points.iter().fold((0.0f32, 0.0f32), |(a, b), &x| {
+        let (phi, psi, g, _) = silhouette_functions(shape, eye, x);
+        (
+            a.max(phi.abs()),
+            b.max(psi.abs() / (g.length() * (eye - x).length())),
+        )
+    })
+}
+
+/// Every vertex has two segments; at most `unresolved` boxes were skipped.
+fn assert_closed(curve: &SilhouetteCurve, what: &str, unresolved: usize) {
+    let degrees = curve.degrees();
+    let bad: Vec<_> = degrees.iter().filter(|&&d| d != 2).collect();
+    assert!(
+        bad.is_empty() && curve.stats.unresolved_boxes <= unresolved,
+        "{what}: {} vertices of degree ≠ 2 ({:?}), stats {:?}",
+        bad.len(),
+        &bad[..bad.len().min(10)],
+        curve.stats
+    );
+}
+
+#[test]
+fn sphere_silhouette_is_the_closed_form_circle_and_its_length_converges() {
+    let (shape, eye, centre) = sphere_scene();
+    let rho = (R * (1.0 - R * R / (D * D)).sqrt()) as f64;
+    let exact = 2.0 * PI * rho;
+    let axis = (eye - centre).normalize();
+    let circle_centre = centre + axis * (R * R / D);
+    let mut errors = Vec::new();
+    for depth in [4, 6] {
+        let curve = extract_silhouette(&shape, eye, &options(depth)).unwrap();
+        let (phi, psi) = residuals(&shape, eye, &curve);
+        assert!(
+            phi < 1e-5 && psi < 1e-5,
+            "depth {depth}: residuals {phi} {psi}"
+        );
+        for &x in &curve.points {
+            let off = x - circle_centre;
+            let radial = (off - axis * off.dot(axis)).length() as f64;
+            assert!(
+                (radial - rho).abs() < 1e-5,
+                "vertex {x} off the circle: {radial} vs {rho}"
+            );
+            assert!(
+                off.dot(axis).abs() < 1e-5,
+                "vertex {x} off the circle's plane"
+            );
+        }
+        assert_closed(&curve, "sphere", 0);
+        let length = curve.polyline_length();
+        let err = (length - exact) / exact;
+        println!(
+            "sphere depth {depth}: {} segments, L = {length:.7}, 2πρ = {exact:.7}, rel. error {err:.3e}, {:?}",
+            curve.segments.len(),
+            curve.stats
+        );
+        // Chords are inside the circle: the polyline is shorter, by about l²/(24ρ²) relatively.
+        assert!(err < 1e-6, "polyline longer than the circle: {err}");
+        errors.push(-err);
+    }
+    // Box size /4 → chord error about /16; demand at least /6.
+    assert!(errors[0] < 2e-3, "depth 4 error {}", errors[0]);
+    assert!(
+        errors[1] < errors[0] / 6.0,
+        "length error does not shrink with depth: {errors:?}"
+    );
+}
+
+#[test]
+fn sphere_samples_are_uniform_by_length_with_exact_density() {
+    let (shape, eye, centre) = sphere_scene();
+    let rho = (R * (1.0 - R * R / (D * D)).sqrt()) as f64;
+    let exact = 2.0 * PI * rho;
+    let axis = (eye - centre).normalize();
+    let circle_centre = centre + axis * (R * R / D);
+    // An orthonormal frame of the circle's plane for the angle.
+    let e1 = axis.any_orthonormal_vector();
+    let e2 = axis.cross(e1);
+    // A coarse curve: the polyline is visibly shorter than the circle, the density must make up for it.
+    let curve = extract_silhouette(
+        &shape,
+        eye,
+        &CurveOptions {
+            max_depth: 3,
+            refine: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_closed(&curve, "coarse sphere", 0);
+    let polyline = curve.polyline_length();
+    let mut rng = Rng::new(7);
+    let n = 200_000;
+    let bins = 40;
+    let mut counts = vec![0u64; bins];
+    let mut sum_inv = 0.0f64;
+    let mut sum_inv2 = 0.0f64;
+    let mut failures = 0;
+    for _ in 0..n {
+        let Some(s) = curve.sample(&shape, [rng.f32(), rng.f32()]) else {
+            failures += 1;
+            continue;
+        };
+        let (phi, psi, g, _) = silhouette_functions(&shape, eye, s.x);
+        assert!(phi.abs() < 1e-5 && psi.abs() < 1e-5 * g.length() * (eye - s.x).length());
+        let off = s.x - circle_centre;
+        let angle = (off.dot(e2) as f64).atan2(off.dot(e1) as f64);
+        let bin = (((angle + PI) / (2.0 * PI)) * bins as f64) as usize;
+        counts[bin.min(bins - 1)] += 1;
+        sum_inv += 1.0 / s.pdf;
+        sum_inv2 += 1.0 / (s.pdf * s.pdf);
+    }
+    assert_eq!(failures, 0, "projections failed");
+    let mean = sum_inv / n as f64;
+    let sd = ((sum_inv2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+    println!(
+        "coarse sphere: polyline {polyline:.6} (rel. {:.3e}), E[1/pdf] = {mean:.6} ± {sd:.1e}, exact {exact:.6} (rel. {:.3e})",
+        (polyline - exact) / exact,
+        (mean - exact) / exact
+    );
+    assert!(
+        (mean - exact).abs() < 4.0 * sd + 1e-5 * exact,
+        "E[1/pdf] = {mean} ± {sd}, exact {exact}"
+    );
+    // The polyline's own length is off by much more than the estimator's error: the test can tell.
+    assert!((polyline - exact).abs() > 10.0 * (4.0 * sd + 1e-5 * exact));
+    let expected = n as f64 / bins as f64;
+    let chi2: f64 = counts
+        .iter()
+        .map(|&c| (c as f64 - expected).powi(2) / expected)
+        .sum();
+    // 39 degrees of freedom: the 99.9% quantile is 72.1.
+    println!("angle histogram chi² = {chi2:.1} (39 dof)");
+    assert!(chi2 < 72.1, "angles not uniform: chi² = {chi2}, {counts:?}");
+}
+
+fn torus_scene() -> (Shape, Vec3) {
+    let shape = shape_at(
+        Sdf::torus([0.0; 3], Vec3::new(0.2, 1.0, 0.3), 0.8, 0.3),
+        Vec3::new(0.05, 0.0, -0.1),
+    );
+    (shape, Vec3::new(0.6, 1.9, 2.7))
+}
+
+/// Extracts at depths 4, 5, 6: every vertex on both zero sets, the polyline closed, the length increasing
+/// with differences shrinking, and the sampling estimator `E[1/pdf]` equal to the Richardson extrapolation.
+/// Returns the lengths.
+fn check_convergence(name: &str, shape: &Shape, eye: Vec3, unresolved: usize) -> Vec<f64> {
+    let mut lengths = Vec::new();
+    let mut last = None;
+    for depth in [4, 5, 6] {
+        let curve = extract_silhouette(shape, eye, &options(depth)).unwrap();
+        let (phi, psi) = residuals(shape, eye, &curve);
+        println!(
+            "{name} depth {depth}: {} segments, L = {:.7}, max |φ| {phi:.1e}, max |ψ|/(|∇φ||c−x|) {psi:.1e}, {:?}",
+            curve.segments.len(),
+            curve.polyline_length(),
+            curve.stats
+        );
+        assert!(
+            phi < 1e-5 && psi < 1e-5,
+            "{name} depth {depth}: {phi} {psi}"
+        );
+        assert_closed(&curve, name, unresolved);
+        lengths.push(curve.polyline_length());
+        last = Some(curve);
+    }
+    let d1 = lengths[1] - lengths[0];
+    let d2 = lengths[2] - lengths[1];
+    // Chords shorten the curve: lengths increase with depth, differences shrink about ×4 per level.
+    println!("{name} length differences {d1:.3e}, {d2:.3e}");
+    assert!(
+        d1 > 0.0 && d2 > 0.0,
+        "{name}: lengths not increasing: {lengths:?}"
+    );
+    assert!(
+        d2 < d1 / 2.5,
+        "{name}: differences do not shrink: {d1} {d2}"
+    );
+    // Richardson: with error ∝ h², L∞ ≈ L6 + d2/3; the sampling estimator of the true length agrees with it.
+    let extrapolated = lengths[2] + d2 / 3.0;
+    let curve = last.unwrap();
+    let mut rng = Rng::new(11);
+    let n = 50_000;
+    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let s = curve
+            .sample(shape, [rng.f32(), rng.f32()])
+            .expect("projection");
+        s1 += 1.0 / s.pdf;
+        s2 += 1.0 / (s.pdf * s.pdf);
+    }
+    let mean = s1 / n as f64;
+    let sd = ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+    println!("{name}: Richardson {extrapolated:.7}, E[1/pdf] = {mean:.7} ± {sd:.1e}");
+    assert!(
+        (mean - extrapolated).abs() < 4.0 * sd + 1e-5 * extrapolated,
+        "{name}: E[1/pdf] {mean} ± {sd} vs Richardson {extrapolated}"
+    );
+    lengths
+}
+
+#[test]
+fn oblique_torus_curve_is_closed_on_both_zero_sets_and_converges() {
+    let (shape, eye) = torus_scene();
+    check_convergence("torus", &shape, eye, 0);
+}
+
+#[test]
+fn smooth_union_curve_is_closed_and_converges() {
+    let blend = Sdf::smooth_union(
+        vec![
+            Sdf::sphere([-0.5, 0.0, 0.0], 0.6),
+            Sdf::sphere([0.5, 0.1, 0.0], 0.5),
+        ],
+        0.3,
+    );
+    let eye = Vec3::new(0.7, 0.4, 2.8).normalize() * 3.0;
+    check_convergence("smooth union", &shape_at(blend, Vec3::ZERO), eye, 0);
+}
+
+#[test]
+fn grid_sphere_curve_is_closed_and_converges() {
+    use implicit_psdr::sdf::bake;
+    let (lo, hi) = (Vec3::splat(-1.5), Vec3::splat(1.5));
+    let grid = Sdf::grid(bake(&Sdf::sphere([0.0; 3], 1.0), lo, hi, 48), lo, hi).unwrap();
+    let (shape, eye, _) = sphere_scene();
+    let shape = shape_at(grid, shape.translate.value());
+    let lengths = check_convergence("grid sphere", &shape, eye, 0);
+    // Trilinear interpolation of the baked distance: close to the analytic circle, not equal to it.
+    let exact = 2.0 * PI * (R * (1.0 - R * R / (D * D)).sqrt()) as f64;
+    assert!(
+        (lengths[2] - exact).abs() < 5e-3 * exact,
+        "{lengths:?} vs {exact}"
+    );
+}
