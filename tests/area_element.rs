@@ -34,6 +34,9 @@
 // Dual-number products and quotients mix operators by design (the product rule is a sum).
 #![allow(clippy::suspicious_arithmetic_impl)]
 
+mod common;
+
+use common::Rng;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::scene::Shape;
 use implicit_psdr::sdf::{Sdf, bake};
@@ -487,24 +490,6 @@ fn area_derivative(shape: &Shape, p0: glam::Vec3) -> Sample {
         dj,
         v: vel.re(),
         kappa: f64::from(shape.curvature(p0)),
-    }
-}
-
-/// Deterministic xorshift64* generator.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn in_box(&mut self, lo: glam::Vec3, hi: glam::Vec3) -> glam::Vec3 {
-        lo + (hi - lo) * glam::Vec3::new(self.f32(), self.f32(), self.f32())
     }
 }
 

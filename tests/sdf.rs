@@ -2,29 +2,14 @@
 //! checks: values, gradients against central differences, curvature against the divergence of the normal
 //! field and against `2/r`, `1/r` and the torus formulas, Lipschitz and bounding-box guarantees, `.npy` I/O.
 
+mod common;
+
+use common::Rng;
 use glam::Vec3;
 use implicit_psdr::Param;
 use implicit_psdr::scalar::Dual32;
 use implicit_psdr::sdf::{GridData, Sdf, bake, read_npy, write_npy};
 use std::path::PathBuf;
-
-/// Deterministic xorshift64* generator: tests must not depend on a seed that changes between runs.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.f32(), self.f32(), self.f32())
-    }
-}
 
 /// Region the suite samples: the node's box with a generous margin, or a fixed cube for unbounded nodes.
 fn region(sdf: &Sdf) -> (Vec3, Vec3) {

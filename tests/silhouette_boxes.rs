@@ -3,6 +3,9 @@
 //! sphere, found by Newton's method for a torus, a smooth union and a grid) lies in a kept box, the kept
 //! volume shrinks about ×4 per level, and boxes away from the surface or the silhouette are culled.
 
+mod common;
+
+use common::Rng;
 use glam::Vec3;
 use implicit_psdr::Param3;
 use implicit_psdr::bsdf::Bsdf;
@@ -12,27 +15,6 @@ use implicit_psdr::scalar::Scalar;
 use implicit_psdr::scene::Shape;
 use implicit_psdr::sdf::interval::Interval;
 use implicit_psdr::sdf::{Sdf, bake};
-
-/// Deterministic xorshift64* generator.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn f64(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64) / (1u64 << 53) as f64
-    }
-    fn f32(&mut self) -> f32 {
-        self.f64() as f32
-    }
-    fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.f32(), self.f32(), self.f32())
-    }
-}
 
 fn shape(sdf: Sdf) -> Shape {
     shape_at(sdf, Vec3::ZERO)

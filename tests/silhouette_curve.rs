@@ -2,6 +2,9 @@
 //! of radius `r·sqrt(1 − r²/d²)`), a torus seen obliquely (both zero sets, closed polyline, converging length),
 //! and sampling by length (flat angle histogram, `E[1/pdf]` = the true length).
 
+mod common;
+
+use common::Rng;
 use glam::Vec3;
 use implicit_psdr::Param3;
 use implicit_psdr::bsdf::Bsdf;
@@ -11,21 +14,6 @@ use implicit_psdr::integrator::silhouette_curve::{
 use implicit_psdr::scene::Shape;
 use implicit_psdr::sdf::Sdf;
 use std::f64::consts::PI;
-
-/// Deterministic xorshift64* generator.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32) / (1u64 << 24) as f32
-    }
-}
 
 fn shape_at(sdf: Sdf, translate: Vec3) -> Shape {
     Shape::translated(
