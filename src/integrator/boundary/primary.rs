@@ -1,0 +1,397 @@
+//! The primary boundary term of the `direct` integrator (DESIGN.md §3 "Boundary integrals", seed §2 with
+//! `x_S = c` the camera centre): silhouettes of shapes seen from the camera.
+//!
+//! # The integral, in film space
+//!
+//! Pixel `j` is `I_j = ∫ d²u w_j(u) L(u)` over the film (pixels), `w_j` the pixel filter centred on the
+//! pixel ("fixed" normalisation), `L(u)` the radiance seen along the camera ray through `u`. `L` jumps
+//! across the image `Γ` of every silhouette curve `{φ = 0, ψ = 0}` (`ψ = ∇φ·(c − x)`) whose points are
+//! visible from `c`: on one side the occluder `M` near `x_B`, on the other the background `x_D` (the
+//! first hit beyond `x_B` on the continued ray, or the environment).
+//!
+//! **Which jump.** The interior estimator ([`super::super::derivative`]) takes the first vertex by area
+//! with attached points `x + V n` and their moving projections. On `M`'s side that already moves the
+//! occluder's region of the film with the surface: at the silhouette the ray is tangent, a normal
+//! displacement `V n` moves the projected contour exactly as the silhouette moves, and the sliding of the
+//! contour over `M` (along the ray) has film-area weight `J_film ∝ |n·q| = 0`. So the occluder side needs
+//! no boundary term (the sphere test checks this: the interior alone is `+ρL ∮ w v dℓ`). What the
+//! interior misses is the background's region shrinking: in `x_D`'s own parametrisation its visibility
+//! jumps from 1 to 0 across `Γ`. With the convention of [`super::boundary_velocity`] (`v > 0` grows the
+//! blocked side, `Δ` = blocked minus clear, as the secondary term's `Δf = −f G L_e`):
+//!
+//! ```text
+//!   ∂I_j ⊃ ∫_Γ w_j(u) Δ v dℓ_img,   Δ = 0 − L_background(x_D)                                   (1)
+//! ```
+//!
+//! `v` the normal velocity (pixels per unit parameter) of `Γ` along the image normal `n_img` pointing to
+//! the background side, **relative to the background's own parametrisation**: relative to the moving
+//! projection of the attached `x_D` on a finite surface, relative to the fixed film point for a
+//! background at infinity (the interior keeps the film point of an escaping camera ray fixed). For the
+//! sphere of radius `r` in a constant environment `L` the sum of both terms is the closed form
+//! `−(1−ρ)L dR/dr ∮ w_j dℓ` (`R` the projected radius).
+//!
+//! # Sampling
+//!
+//! `x_B` is sampled on the extracted 3D silhouette curve ([`SilhouetteCurve::sample`]) with density
+//! `p` per unit length `dℓ` of the true curve, after choosing one of the `K` shapes with a non-empty curve
+//! uniformly. Its image is `u_B = P(x_B)` (`P` = [`crate::camera::CameraFrame::project`]); with `T` the
+//! unit curve tangent and `P'` the 2×3 Jacobian of the projection,
+//!
+//! ```text
+//!   dℓ_img = |P'(x_B) T| dℓ,   P'_u = f (r z − f̂ (q·r)) / z²,  P'_v = −f (up z − f̂ (q·up)) / z²
+//! ```
+//!
+//! (`q = x_B − c`, `z = q·f̂`, `r`, `up`, `f̂` the camera axes, `f` the focal length in pixels). The image
+//! tangent is `t = P'T`; `n_img ⊥ t`. So one sample contributes, to every pixel whose filter covers `u_B`,
+//!
+//! ```text
+//!   w_j(u_B) · (−L_bg) · v · |P'T| · K / p                                                           (2)
+//! ```
+//!
+//! averaged over the `N` samples of the whole image (own random stream [`PRIMARY_STREAM`]).
+//!
+//! # The image-space velocity `v` by AD
+//!
+//! Let the parameters move with the background point held: the ray from the lifted eye `c(π)` is
+//! `x(π) = c(π) + |c x_B| d̂(π)` at the depth of `x_B`, with `d̂` the unit direction towards the attached
+//! `x_D(π)` ([`SceneAttach`]), or for a background at infinity the direction through the fixed film
+//! point `u`, `r (u_x − c_x) − up (u_y − c_y) + f̂ f` normalised, in the lifted camera frame. The tangency
+//! residual `h(π) = φ_π(x(π))` (shape parameters lifted too) is 0 at the primal. Moving `u` by `δ n_img`
+//! (or the film point of `x_D` by `δ n_img`: the same change of direction) changes it by
+//! `∇φ(x_B)·∂x/∂u n_img δ = |c x_B| ∇φ·(I − d̂d̂ᵀ) m / |d| δ`, `m = r n_x − up n_y`
+//! (the ray is tangent at `x_B`, so to first order the minimum of `φ` along the ray stays at `x_B`'s
+//! depth). Hence `v = −∂πh / rate`, `rate = |c x_B| ∇φ·(I − d̂d̂ᵀ) m / |d|`, and `n_img` is oriented so
+//! that `rate > 0` (towards growing `φ`: the background side). This is [`super::boundary_velocity`]'s
+//! construction with `x_S = c` moving with the camera and the far end replaced by the film point.
+//!
+//! # The background radiance
+//!
+//! A detached `f32` estimate (its derivative is second order in (1)): one camera path
+//! ([`trace_path`], the `direct` integrator's own estimator) along the ray from `c` towards
+//! `x_B + δ n_B`, `δ` = 1/50 of a pixel at `x_B`'s distance (at least `4 eps`); its first vertex is
+//! `x_D`. `x_B` must be visible: that ray must not hit anything before `x_B`'s depth (less a margin),
+//! else the sample contributes 0. Points of the curve where the view ray is not a silhouette direction (`κ_n ≤ 0`:
+//! the ray enters the solid on both sides) contribute 0.
+//!
+//! **Scope.** `direct` only (the side radiances use its estimator; other integrators are refused with
+//! [`Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own). Not
+//! included: edges of finite emitters seen directly, crease edges, the film edges.
+
+use super::segment::is_silhouette_direction;
+use crate::error::{Error, Result};
+use crate::film::Image;
+use crate::integrator::IntegratorKind;
+use crate::integrator::attach::{SceneAttach, window_slots};
+use crate::integrator::derivative::{DiffOptions, Directions};
+use crate::integrator::path::{
+    PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
+};
+use crate::integrator::silhouette_curve::{
+    CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
+};
+use crate::math::{Ray, Vec3};
+use crate::sampler::Sampler;
+use crate::scalar::DualN;
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// The random stream of primary boundary samples (distinct from the camera's and the secondary term's).
+pub const PRIMARY_STREAM: u64 = 0x9121_B0DA;
+
+/// Samples per parallel work item (results are gathered in sample order: deterministic).
+const CHUNK: u64 = 256;
+
+/// The primary boundary term of the derivative with respect to the parameters in slots `0..count`
+/// (selected with [`Scene::select_parameters`]), estimated with `samples` silhouette samples for the
+/// whole image (see the [module docs](self)). One image per parameter, the layout of
+/// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
+///
+/// Errors: an integrator other than `direct`, a box pixel filter, a failed curve extraction.
+pub fn render_primary(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    samples: u64,
+) -> Result<Vec<Image>> {
+    match count {
+        0 | 1 => render_primary_in::<DualN<1>>(scene, count, options, samples),
+        2 => render_primary_in::<DualN<2>>(scene, count, options, samples),
+        3 | 4 => render_primary_in::<DualN<4>>(scene, count, options, samples),
+        _ => render_primary_in::<DualN<8>>(scene, count, options, samples),
+    }
+}
+
+/// [`render_primary`] with a chosen scalar type, in passes of `S::COUNT` parameters.
+pub fn render_primary_in<S: Directions>(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    samples: u64,
+) -> Result<Vec<Image>> {
+    if scene.integrator != IntegratorKind::Direct {
+        return Err(Error::Unsupported(
+            "the primary boundary term is implemented for the direct integrator only".into(),
+        ));
+    }
+    if !scene.camera.filter.is_continuous() {
+        return Err(Error::Unsupported(
+            "boundary terms with the box filter need pixel-edge terms: use the tent or gaussian filter"
+                .into(),
+        ));
+    }
+    let curves = silhouettes(scene)?;
+    let mut out = Vec::with_capacity(count);
+    for lo in (0..count).step_by(S::COUNT) {
+        let width = (count - lo).min(S::COUNT);
+        let windowed = window_slots(scene, lo, S::COUNT);
+        out.extend(pass::<S>(
+            &windowed,
+            &curves,
+            width,
+            options.render.seed,
+            samples,
+        ));
+    }
+    Ok(out)
+}
+
+/// The silhouette curves seen from the camera centre of every shape with finite bounds (non-empty only).
+pub fn silhouettes(scene: &Scene) -> Result<Vec<(usize, SilhouetteCurve)>> {
+    let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
+    let mut curves = Vec::new();
+    for (i, shape) in scene.shapes.iter().enumerate() {
+        let b = shape.bounds;
+        if !b.is_finite() || b.is_empty() {
+            continue;
+        }
+        let curve = dedup_segments(extract_silhouette(shape, eye, &CurveOptions::default())?);
+        if curve.polyline_length() > 0.0 {
+            curves.push((i, curve));
+        }
+    }
+    Ok(curves)
+}
+
+/// Removes repeated segments (the same pair of welded vertices, either way round). A curve piece lying
+/// exactly in a face shared by two octree boxes (e.g. a sphere's silhouette circle seen along an axis
+/// in a dyadic plane of the octree) is extracted by both boxes; counted twice, it would double the
+/// sampled length and so the estimate.
+fn dedup_segments(mut curve: SilhouetteCurve) -> SilhouetteCurve {
+    let mut seen = std::collections::HashSet::new();
+    curve
+        .segments
+        .retain(|s| seen.insert((s[0].min(s[1]), s[0].max(s[1]))));
+    let mut total = 0.0f64;
+    curve.cumulative = curve
+        .segments
+        .iter()
+        .map(|s| {
+            total += (curve.points[s[1] as usize] - curve.points[s[0] as usize])
+                .as_dvec3()
+                .length();
+            total
+        })
+        .collect();
+    curve
+}
+
+/// One pass over all samples: directions `0..width` of `S`.
+fn pass<S: Directions>(
+    scene: &Scene,
+    curves: &[(usize, SilhouetteCurve)],
+    width: usize,
+    seed: u64,
+    samples: u64,
+) -> Vec<Image> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let mut images = vec![Image::new(w, h); width];
+    if curves.is_empty() || samples == 0 {
+        return images;
+    }
+    let chunks: Vec<Vec<(usize, Vec3<S>)>> = (0..samples.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut splats = Vec::new();
+            let mut record = PathRecord::default();
+            let mut counters = TraceCounters::default();
+            let attach = SceneAttach::new(scene);
+            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+                let mut sampler = Sampler::new(seed, PRIMARY_STREAM, 0, k);
+                sample(
+                    scene,
+                    &attach,
+                    curves,
+                    &mut sampler,
+                    &mut record,
+                    &mut splats,
+                    &mut counters,
+                );
+            }
+            splats
+        })
+        .collect();
+    let inv = 1.0 / samples as f64;
+    // Sum in f64 in sample order: the same result whatever the thread count.
+    let mut acc = vec![0.0f64; 3 * width * (w * h) as usize];
+    for (pixel, v) in chunks.iter().flatten() {
+        for k in 0..width {
+            let base = 3 * (k * (w * h) as usize + pixel);
+            acc[base] += v.x.direction(k) as f64;
+            acc[base + 1] += v.y.direction(k) as f64;
+            acc[base + 2] += v.z.direction(k) as f64;
+        }
+    }
+    for (k, image) in images.iter_mut().enumerate() {
+        let (off, len) = (3 * k * (w * h) as usize, image.rgb.len());
+        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + len]) {
+            *d = (a * inv) as f32;
+        }
+    }
+    images
+}
+
+/// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
+fn sample<S: Directions>(
+    scene: &Scene,
+    attach: &SceneAttach,
+    curves: &[(usize, SilhouetteCurve)],
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    splats: &mut Vec<(usize, Vec3<S>)>,
+    counters: &mut TraceCounters,
+) {
+    let k = curves.len();
+    let pick = ((sampler.next_1d() * k as f32) as usize).min(k - 1);
+    let (m, curve) = (curves[pick].0, &curves[pick].1);
+    let shape = &scene.shapes[m];
+    let u = sampler.next_2d();
+    let Some(cs) = curve.sample(shape, [u.x, u.y]) else {
+        return;
+    };
+    if !(cs.pdf > 0.0 && cs.pdf.is_finite()) {
+        return;
+    }
+    let frame = scene.camera.frame::<f32>();
+    let eye: glam::Vec3 = frame.origin.into();
+    let (right, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
+        (frame.right.into(), frame.up.into(), frame.forward.into());
+    let focal = frame.focal;
+    let x_b = cs.x;
+    let q = x_b - eye;
+    let dist = q.length();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return;
+    }
+    let omega = q / dist;
+    if !is_silhouette_direction(shape, x_b, omega) {
+        return;
+    }
+    let Some((px, py)) = frame.project(Vec3::constant(x_b)) else {
+        return;
+    };
+    let filter = scene.camera.filter;
+    let radius = filter.radius();
+    let (wf, hf) = (scene.camera.width as f32, scene.camera.height as f32);
+    if px <= -radius || py <= -radius || px >= wf + radius || py >= hf + radius {
+        return;
+    }
+    let (_, _, grad, _) = silhouette_functions(shape, eye, x_b);
+    let Some(n_b) = grad.try_normalize() else {
+        return;
+    };
+    // Image tangent t = P'T and its length (the measure change dℓ_img/dℓ).
+    let z = q.dot(fwd);
+    if z <= 0.0 {
+        return;
+    }
+    let du = (right * z - fwd * q.dot(right)) * (focal / (z * z));
+    let dv = -(up * z - fwd * q.dot(up)) * (focal / (z * z));
+    let t_img = glam::Vec2::new(du.dot(cs.tangent), dv.dot(cs.tangent));
+    let len_img = t_img.length();
+    if !(len_img > 0.0 && len_img.is_finite()) {
+        return;
+    }
+    let n_img = glam::Vec2::new(-t_img.y, t_img.x) / len_img;
+    // rate = ∂h/∂u along n_img (module docs).
+    let (ox, oy) = (px - frame.center.0, py - frame.center.1);
+    let d_raw = right * ox - up * oy + fwd * focal;
+    let d_len = d_raw.length();
+    let d_hat = d_raw / d_len;
+    let proj = |m: glam::Vec3| m - d_hat * d_hat.dot(m);
+    let mut rate = dist / d_len * grad.dot(proj(right * n_img.x - up * n_img.y));
+    // Orient n_img towards growing φ (the background side): flipping it flips the rate.
+    if rate < 0.0 {
+        rate = -rate;
+    }
+    if !(rate > 0.0 && rate.is_finite()) {
+        return;
+    }
+    // The background side: x_D and its radiance, along the ray just outside the silhouette.
+    let delta = (0.02 * dist / focal).max(4.0 * scene.trace.eps);
+    let Some(d_out) = (x_b + n_b * delta - eye).try_normalize() else {
+        return;
+    };
+    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
+    if occluded(scene, &Ray::new(eye, d_out), dist - margin, None, counters) {
+        return;
+    }
+    trace_path(
+        scene,
+        Ray::new(eye, d_out),
+        scene.integrator.max_scatter(),
+        sampler,
+        record,
+        counters,
+    );
+    let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
+    if l_bg == glam::Vec3::ZERO {
+        return;
+    }
+    // v = −∂πh / rate, relative to the background's own parametrisation (module docs): the ray from the
+    // moving eye towards the attached x_D, or through the fixed film point for a background at infinity.
+    let fs = scene.camera.frame::<S>();
+    let x_d = record.vertices.first().and_then(|v| match v.kind {
+        VertexKind::Shape(i) => Some(attach.shape_vertex::<S>(i, v.p, v.n).x),
+        VertexKind::Emitter(e) => Some(attach.emitter_vertex::<S>(e, v.p, v.n).x),
+        VertexKind::Environment(_) => None,
+    });
+    let d_s = match x_d {
+        Some(x_d) => x_d - fs.origin,
+        None => fs.right * S::constant(ox) - fs.up * S::constant(oy) + fs.forward * fs.focal,
+    }
+    .normalize_or_zero();
+    let h = shape.eval(fs.origin + d_s * S::constant(dist));
+    let v = -(h - h.detach()) / rate;
+    // Δ = blocked − clear = 0 − L_bg (module docs: the occluder's own side is the interior's).
+    let scale = -l_bg * (len_img * k as f32 / cs.pdf as f32);
+    if scale == glam::Vec3::ZERO || !scale.is_finite() {
+        return;
+    }
+    let value = Vec3::<S>::constant(scale) * v;
+    if !(0..S::COUNT).all(|k| {
+        value.x.direction(k).is_finite()
+            && value.y.direction(k).is_finite()
+            && value.z.direction(k).is_finite()
+    }) {
+        return;
+    }
+    let (w, hh) = (scene.camera.width as i64, scene.camera.height as i64);
+    let reach = radius.ceil() as i64;
+    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
+    for jy in (cy - reach).max(0)..=(cy + reach).min(hh - 1) {
+        let dy = py - (jy as f32 + 0.5);
+        if dy.abs() >= radius {
+            continue;
+        }
+        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
+            let dx = px - (jx as f32 + 0.5);
+            if dx.abs() >= radius {
+                continue;
+            }
+            let fw = filter.eval::<f32>(dx, dy);
+            if fw != 0.0 {
+                splats.push(((jy * w + jx) as usize, value * S::constant(fw)));
+            }
+        }
+    }
+}
