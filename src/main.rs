@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use implicit_psdr::film::{Image, colormap};
 use implicit_psdr::integrator::derivative::{
-    DiffOptions, Normalization, render_derivatives, render_derivatives_with_secondary,
+    DiffOptions, Normalization, render_derivatives, render_derivatives_with_boundary,
 };
 use implicit_psdr::integrator::{self, IntegratorKind, RenderOptions, fd};
 use implicit_psdr::{compare, film, scene, sdf};
@@ -84,6 +84,9 @@ enum Command {
         /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it.
         #[arg(long, default_value_t = DEFAULT_SPP_SECONDARY)]
         spp_secondary: u32,
+        /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it.
+        #[arg(long, default_value_t = DEFAULT_SPP_PRIMARY)]
+        spp_primary: u32,
         /// Pixel normalisation: `fixed` (the filter-weight sum is a constant) or `differentiable`.
         #[arg(long, value_enum, default_value_t = NormalizationArg::Fixed)]
         normalization: NormalizationArg,
@@ -215,6 +218,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             terms,
             spp_secondary,
+            spp_primary,
             normalization,
             out,
             png,
@@ -224,7 +228,10 @@ fn run(cli: Cli) -> Result<()> {
             spp,
             seed,
             terms,
-            spp_secondary,
+            BoundaryBudget {
+                primary: spp_primary,
+                secondary: spp_secondary,
+            },
             normalization.into(),
             &out,
             &png,
@@ -411,13 +418,50 @@ fn params(scene_path: &Path) -> Result<()> {
 
 /// Default boundary samples per pixel of the secondary term (`diff --spp-secondary`).
 const DEFAULT_SPP_SECONDARY: u32 = 64;
+/// Default silhouette-curve samples per pixel of the primary term (`diff --spp-primary`).
+const DEFAULT_SPP_PRIMARY: u32 = 16;
 
-/// What `diff` says about the terms it computes, until every boundary term exists.
-const WITH_SECONDARY_NOTE: &str = "note: derivatives hold the interior and secondary (shadow) terms; \
-     the primary (silhouette) term is not computed yet, so d.P is incomplete where silhouettes move";
-const INTERIOR_ONLY_NOTE: &str = "note: derivatives hold the interior term only; boundary (silhouette \
-     and shadow) terms are not computed (the secondary term exists for the direct integrator, with \
-     --spp-secondary > 0)";
+/// Boundary samples per pixel of each boundary term (0 skips it).
+struct BoundaryBudget {
+    primary: u32,
+    secondary: u32,
+}
+
+/// The `note:` line of `diff`: which terms `d.P` holds.
+fn terms_note(interior_only_reason: Option<&str>, budget: &BoundaryBudget) -> String {
+    if let Some(reason) = interior_only_reason {
+        return format!(
+            "note: derivatives hold the interior term only ({reason}); the silhouette and shadow \
+             terms are missing, so d.P is wrong where edges move"
+        );
+    }
+    let mut held = vec!["interior"];
+    let mut missing = Vec::new();
+    for (n, name) in [
+        (budget.secondary, "secondary (shadow)"),
+        (budget.primary, "primary (silhouette)"),
+    ] {
+        if n > 0 {
+            held.push(name)
+        } else {
+            missing.push(name)
+        }
+    }
+    let missing = if missing.is_empty() {
+        String::new()
+    } else {
+        format!("; skipped: {} (budget 0)", missing.join(", "))
+    };
+    let held = match held.as_slice() {
+        [one] => one.to_string(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+        [] => String::new(),
+    };
+    format!(
+        "note: derivatives hold the {held} terms{missing}; not yet handled: creases, emitter edges \
+         seen directly, image borders, and the path integrator's boundary terms"
+    )
+}
 
 /// The PNG of a derivative command: the image beside one colour-mapped panel per derivative. Returns it
 /// with each panel's colour scale.
@@ -445,7 +489,7 @@ fn diff(
     spp: Option<u32>,
     seed: u64,
     terms: bool,
-    spp_secondary: u32,
+    budget: BoundaryBudget,
     normalization: Normalization,
     out: &Path,
     png: &Path,
@@ -462,14 +506,23 @@ fn diff(
         render: render_options(&scene, spp, seed),
         normalization,
     };
-    let with_secondary = spp_secondary > 0 && scene.integrator == IntegratorKind::Direct;
-    let result = if with_secondary {
+    // The boundary terms exist for the direct integrator; elsewhere the interior term stands alone
+    // and the note says so.
+    let interior_only = if scene.integrator != IntegratorKind::Direct {
+        Some("boundary terms exist for the direct integrator only")
+    } else if budget.primary == 0 && budget.secondary == 0 {
+        Some("--spp-primary and --spp-secondary are 0")
+    } else {
+        None
+    };
+    let result = if interior_only.is_none() {
         let pixels = scene.camera.width as u64 * scene.camera.height as u64;
-        render_derivatives_with_secondary(
+        render_derivatives_with_boundary(
             &scene,
             params.len(),
             &options,
-            spp_secondary as u64 * pixels,
+            budget.primary as u64 * pixels,
+            budget.secondary as u64 * pixels,
         )?
     } else {
         render_derivatives(&scene, params.len(), &options)?
@@ -493,6 +546,9 @@ fn diff(
         for (p, d) in params.iter().zip(&result.interior) {
             channels.extend(rgb_channels(&format!("d_interior.{p}."), d));
         }
+        for (p, d) in params.iter().zip(&result.primary) {
+            channels.extend(rgb_channels(&format!("d_primary.{p}."), d));
+        }
         for (p, d) in params.iter().zip(&result.secondary) {
             channels.extend(rgb_channels(&format!("d_secondary.{p}."), d));
         }
@@ -501,11 +557,7 @@ fn diff(
     let (picture, scales) = derivative_picture(image, &derivatives);
     write_outputs(out, png, image, &channels, &picture)?;
 
-    if with_secondary {
-        println!("{WITH_SECONDARY_NOTE}");
-    } else {
-        println!("{INTERIOR_ONLY_NOTE}");
-    }
+    println!("{}", terms_note(interior_only, &budget));
     println!(
         "rendered {}x{} and {} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
         image.width,

@@ -127,7 +127,9 @@ fn diff_writes_the_promised_channels() {
     );
     let stdout = assert_success(&out);
     assert!(
-        stdout.contains("note: derivatives hold the interior and secondary (shadow) terms"),
+        stdout.contains(
+            "note: derivatives hold the interior, secondary (shadow) and primary (silhouette) terms"
+        ),
         "{stdout}"
     );
     assert!(
@@ -169,6 +171,7 @@ fn diff_writes_the_promised_channels() {
         rgb(""),
         rgb("d.ball.radius."),
         rgb("d_interior.ball.radius."),
+        rgb("d_primary.ball.radius."),
         rgb("d_secondary.ball.radius."),
     ]
     .concat();
@@ -187,6 +190,8 @@ fn diff_writes_the_promised_channels() {
             "1",
             "--terms",
             "--spp-secondary",
+            "0",
+            "--spp-primary",
             "0",
             "--out",
             "i.exr",

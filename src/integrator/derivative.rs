@@ -71,6 +71,9 @@ pub struct DerivativeImages {
     /// `k`; empty when it was not computed ([`render_derivatives`] leaves it empty,
     /// [`render_derivatives_with_secondary`] fills it).
     pub secondary: Vec<Image>,
+    /// `primary[k]`: the primary boundary term (silhouettes seen by the camera,
+    /// [`super::boundary::primary`]) for slot `k`; empty when it was not computed.
+    pub primary: Vec<Image>,
     /// Counters.
     pub stats: RenderStats,
 }
@@ -164,6 +167,7 @@ pub fn render_derivatives_in<S: Directions>(
         image: image.unwrap_or_else(|| Image::new(scene.camera.width, scene.camera.height)),
         interior,
         secondary: Vec::new(),
+        primary: Vec::new(),
         stats,
     })
 }
@@ -185,14 +189,40 @@ pub fn render_derivatives_with_secondary(
     Ok(out)
 }
 
+/// [`render_derivatives`] plus the boundary terms: the primary term with `primary_samples` curve samples
+/// and the secondary term with `secondary_samples` boundary samples for the whole image (0 skips a term).
+/// Errors as each term; the boundary terms exist for the `direct` integrator only.
+pub fn render_derivatives_with_boundary(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    primary_samples: u64,
+    secondary_samples: u64,
+) -> Result<DerivativeImages> {
+    let start = std::time::Instant::now();
+    let mut out = render_derivatives(scene, count, options)?;
+    if secondary_samples > 0 {
+        out.secondary =
+            super::boundary::secondary::render_secondary(scene, count, options, secondary_samples)?;
+    }
+    if primary_samples > 0 {
+        out.primary =
+            super::boundary::primary::render_primary(scene, count, options, primary_samples)?;
+    }
+    out.stats.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
 impl DerivativeImages {
-    /// The derivative images computed so far: `interior[k] + secondary[k]` (the interior alone where
-    /// the secondary term was not computed). Still missing: the primary boundary term.
+    /// The derivative images: `interior[k] + secondary[k] + primary[k]`, each boundary term where it
+    /// was computed.
     pub fn total(&self) -> Vec<Image> {
         let mut total = self.interior.clone();
-        for (t, s) in total.iter_mut().zip(&self.secondary) {
-            for (a, b) in t.rgb.iter_mut().zip(&s.rgb) {
-                *a += b;
+        for term in [&self.secondary, &self.primary] {
+            for (t, s) in total.iter_mut().zip(term) {
+                for (a, b) in t.rgb.iter_mut().zip(&s.rgb) {
+                    *a += b;
+                }
             }
         }
         total
