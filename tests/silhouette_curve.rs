@@ -283,3 +283,21 @@ fn grid_sphere_curve_is_closed_and_converges() {
         "{lengths:?} vs {exact}"
     );
 }
+
+/// Regression: a silhouette lying exactly in a face shared by two octree boxes (a unit sphere at the
+/// origin seen along `z` from distance 4: the circle lies in the plane `z = 1/4`, a dyadic plane of the
+/// octree over `[−1, 1]³`) was extracted by both boxes, doubling the curve's length.
+#[test]
+fn curve_in_a_shared_box_face_is_extracted_once() {
+    let shape = shape_at(Sdf::sphere([0.0; 3], 1.0), Vec3::ZERO);
+    let eye = Vec3::new(0.0, 0.0, 4.0);
+    let curve = extract_silhouette(&shape, eye, &options(5)).unwrap();
+    let rho = (1.0f64 - 1.0 / 16.0).sqrt();
+    let length = curve.polyline_length();
+    assert!(
+        (length / (2.0 * std::f64::consts::PI * rho) - 1.0).abs() < 1e-3,
+        "length {length} vs {}",
+        2.0 * std::f64::consts::PI * rho
+    );
+    assert_closed(&curve, "sphere seen along z", 0);
+}

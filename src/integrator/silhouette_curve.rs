@@ -211,6 +211,10 @@ pub fn extract_silhouette(
         .map_or(1e-6, |b| 1e-4 * b.extent().max_element());
     let mut welder = Welder::new(weld);
     let mut segments = Vec::new();
+    // A curve piece lying exactly in a face shared by two boxes (a sphere's silhouette circle seen along
+    // an axis, in a dyadic plane of the octree) is extracted by both: keep each welded segment once, or
+    // the sampled length, and every estimate built on it, would double there.
+    let mut seen = std::collections::HashSet::new();
     for (pieces, st) in per_box {
         stats.resolved_boxes += st.resolved_boxes;
         stats.empty_boxes += st.empty_boxes;
@@ -219,7 +223,7 @@ pub fn extract_silhouette(
         stats.failed_refinements += st.failed_refinements;
         for [a, e] in pieces {
             let (i, j) = (welder.index(a), welder.index(e));
-            if i != j {
+            if i != j && seen.insert((i.min(j), i.max(j))) {
                 segments.push([i, j]);
             }
         }

@@ -164,35 +164,12 @@ pub fn silhouettes(scene: &Scene) -> Result<Vec<(usize, SilhouetteCurve)>> {
         if !b.is_finite() || b.is_empty() {
             continue;
         }
-        let curve = dedup_segments(extract_silhouette(shape, eye, &CurveOptions::default())?);
+        let curve = extract_silhouette(shape, eye, &CurveOptions::default())?;
         if curve.polyline_length() > 0.0 {
             curves.push((i, curve));
         }
     }
     Ok(curves)
-}
-
-/// Removes repeated segments (the same pair of welded vertices, either way round). A curve piece lying
-/// exactly in a face shared by two octree boxes (e.g. a sphere's silhouette circle seen along an axis
-/// in a dyadic plane of the octree) is extracted by both boxes; counted twice, it would double the
-/// sampled length and so the estimate.
-fn dedup_segments(mut curve: SilhouetteCurve) -> SilhouetteCurve {
-    let mut seen = std::collections::HashSet::new();
-    curve
-        .segments
-        .retain(|s| seen.insert((s[0].min(s[1]), s[0].max(s[1]))));
-    let mut total = 0.0f64;
-    curve.cumulative = curve
-        .segments
-        .iter()
-        .map(|s| {
-            total += (curve.points[s[1] as usize] - curve.points[s[0] as usize])
-                .as_dvec3()
-                .length();
-            total
-        })
-        .collect();
-    curve
 }
 
 /// One pass over all samples: directions `0..width` of `S`.
