@@ -102,6 +102,20 @@ impl Directions for Dual32 {
     }
 }
 
+/// Calls `$f::<S>(args)` with the narrowest `DualN` that holds `$count` parameters (several passes of
+/// eight beyond eight): one dispatch for the interior and both boundary terms.
+macro_rules! dispatch_directions {
+    ($count:expr, $f:ident($($arg:expr),* $(,)?)) => {
+        match $count {
+            0 | 1 => $f::<crate::scalar::DualN<1>>($($arg),*),
+            2 => $f::<crate::scalar::DualN<2>>($($arg),*),
+            3 | 4 => $f::<crate::scalar::DualN<4>>($($arg),*),
+            _ => $f::<crate::scalar::DualN<8>>($($arg),*),
+        }
+    };
+}
+pub(crate) use dispatch_directions;
+
 /// Renders the image and the interior derivative with respect to the parameters in slots `0..count`
 /// (selected with [`Scene::select_parameters`]). Errors: a discontinuous (box) pixel filter.
 ///
@@ -111,12 +125,7 @@ pub fn render_derivatives(
     count: usize,
     options: &DiffOptions,
 ) -> Result<DerivativeImages> {
-    match count {
-        0 | 1 => render_derivatives_in::<DualN<1>>(scene, count, options),
-        2 => render_derivatives_in::<DualN<2>>(scene, count, options),
-        3 | 4 => render_derivatives_in::<DualN<4>>(scene, count, options),
-        _ => render_derivatives_in::<DualN<8>>(scene, count, options),
-    }
+    dispatch_directions!(count, render_derivatives_in(scene, count, options))
 }
 
 /// [`render_derivatives`] with a chosen scalar type `S`, in passes of `S::COUNT` parameters.

@@ -5,7 +5,7 @@
 //! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
 //! normal velocity `V_∂` of the discontinuity curve by AD. [`secondary`] estimates the secondary
 //! boundary term (shadows) of the `direct` integrator with them, [`primary`] its primary boundary term
-//! (silhouettes seen from the camera; a library function, not yet wired into `diff`).
+//! (silhouettes seen from the camera).
 
 pub mod primary;
 pub mod secondary;
@@ -15,3 +15,42 @@ pub use segment::{
     BoundarySegment, boundary_jacobian, boundary_velocity, is_silhouette_direction,
     primary_measure_change, silhouette_tangent,
 };
+
+use crate::error::{Error, Result};
+use crate::film::Image;
+use crate::integrator::IntegratorKind;
+use crate::integrator::attach::window_slots;
+use crate::integrator::derivative::Directions;
+use crate::scene::Scene;
+
+/// The boundary terms exist for the `direct` integrator and continuous pixel filters; `term` names the
+/// term in the error.
+fn check_supported(scene: &Scene, term: &str) -> Result<()> {
+    if scene.integrator != IntegratorKind::Direct {
+        return Err(Error::Unsupported(format!(
+            "the {term} boundary term is implemented for the direct integrator only"
+        )));
+    }
+    if !scene.camera.filter.is_continuous() {
+        return Err(Error::Unsupported(
+            "boundary terms with the box filter need pixel-edge terms: use the tent or gaussian filter"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Runs `pass(windowed scene, width)` once per window of `S::COUNT` parameters of slots `0..count`
+/// (the window's slots renumbered from 0) and concatenates the per-parameter images in slot order.
+fn in_windows<S: Directions>(
+    scene: &Scene,
+    count: usize,
+    mut pass: impl FnMut(&Scene, usize) -> Vec<Image>,
+) -> Vec<Image> {
+    let mut out = Vec::with_capacity(count);
+    for lo in (0..count).step_by(S::COUNT) {
+        let width = (count - lo).min(S::COUNT);
+        out.extend(pass(&window_slots(scene, lo, S::COUNT), width));
+    }
+    out
+}

@@ -74,15 +74,15 @@
 //! the ray enters the solid on both sides) contribute 0.
 //!
 //! **Scope.** `direct` only (the side radiances use its estimator; other integrators are refused with
-//! [`Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own). Not
+//! [`crate::Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own). Not
 //! included: edges of finite emitters seen directly, crease edges, the film edges.
 
 use super::segment::is_silhouette_direction;
-use crate::error::{Error, Result};
+use super::{check_supported, in_windows};
+use crate::error::Result;
 use crate::film::Image;
-use crate::integrator::IntegratorKind;
-use crate::integrator::attach::{SceneAttach, window_slots};
-use crate::integrator::derivative::{DiffOptions, Directions};
+use crate::integrator::attach::SceneAttach;
+use crate::integrator::derivative::{DiffOptions, Directions, dispatch_directions};
 use crate::integrator::path::{
     PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
 };
@@ -91,7 +91,6 @@ use crate::integrator::silhouette_curve::{
 };
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
-use crate::scalar::DualN;
 use crate::scene::Scene;
 use rayon::prelude::*;
 
@@ -113,12 +112,7 @@ pub fn render_primary(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    match count {
-        0 | 1 => render_primary_in::<DualN<1>>(scene, count, options, samples),
-        2 => render_primary_in::<DualN<2>>(scene, count, options, samples),
-        3 | 4 => render_primary_in::<DualN<4>>(scene, count, options, samples),
-        _ => render_primary_in::<DualN<8>>(scene, count, options, samples),
-    }
+    dispatch_directions!(count, render_primary_in(scene, count, options, samples))
 }
 
 /// [`render_primary`] with a chosen scalar type, in passes of `S::COUNT` parameters.
@@ -128,31 +122,11 @@ pub fn render_primary_in<S: Directions>(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    if scene.integrator != IntegratorKind::Direct {
-        return Err(Error::Unsupported(
-            "the primary boundary term is implemented for the direct integrator only".into(),
-        ));
-    }
-    if !scene.camera.filter.is_continuous() {
-        return Err(Error::Unsupported(
-            "boundary terms with the box filter need pixel-edge terms: use the tent or gaussian filter"
-                .into(),
-        ));
-    }
+    check_supported(scene, "primary")?;
     let curves = silhouettes(scene)?;
-    let mut out = Vec::with_capacity(count);
-    for lo in (0..count).step_by(S::COUNT) {
-        let width = (count - lo).min(S::COUNT);
-        let windowed = window_slots(scene, lo, S::COUNT);
-        out.extend(pass::<S>(
-            &windowed,
-            &curves,
-            width,
-            options.render.seed,
-            samples,
-        ));
-    }
-    Ok(out)
+    Ok(in_windows::<S>(scene, count, |windowed, width| {
+        pass::<S>(windowed, &curves, width, options.render.seed, samples)
+    }))
 }
 
 /// The silhouette curves seen from the camera centre of every shape with finite bounds (non-empty only).

@@ -62,21 +62,20 @@
 //! shape point to an emitter grazes an occluder.
 //!
 //! **Scope.** Only the `direct` integrator (paths `x₀ x_S x_D`); other integrators are refused with
-//! [`Error::Unsupported`]. Not included: the primary boundary (silhouettes seen from the camera), the
+//! [`crate::Error::Unsupported`]. Not included: the primary boundary (silhouettes seen from the camera), the
 //! discontinuity of one-sided emitters and BSDFs across their tangent planes, crease edges.
 
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
-use crate::error::{Error, Result};
+use super::{check_supported, in_windows};
+use crate::error::Result;
 use crate::film::Image;
-use crate::integrator::IntegratorKind;
-use crate::integrator::attach::{SceneAttach, window_slots};
-use crate::integrator::derivative::{DiffOptions, Directions};
+use crate::integrator::attach::SceneAttach;
+use crate::integrator::derivative::{DiffOptions, Directions, dispatch_directions};
 use crate::integrator::path::{TraceCounters, occluded};
 use crate::integrator::shading::geometry_term;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
-use crate::scalar::DualN;
 use crate::scene::{Intersection, Scene, Surface};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -100,12 +99,7 @@ pub fn render_secondary(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    match count {
-        0 | 1 => render_secondary_in::<DualN<1>>(scene, count, options, samples),
-        2 => render_secondary_in::<DualN<2>>(scene, count, options, samples),
-        3 | 4 => render_secondary_in::<DualN<4>>(scene, count, options, samples),
-        _ => render_secondary_in::<DualN<8>>(scene, count, options, samples),
-    }
+    dispatch_directions!(count, render_secondary_in(scene, count, options, samples))
 }
 
 /// [`render_secondary`] with a chosen scalar type, in passes of `S::COUNT` parameters.
@@ -115,24 +109,10 @@ pub fn render_secondary_in<S: Directions>(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    if scene.integrator != IntegratorKind::Direct {
-        return Err(Error::Unsupported(
-            "the secondary boundary term is implemented for the direct integrator only".into(),
-        ));
-    }
-    if !scene.camera.filter.is_continuous() {
-        return Err(Error::Unsupported(
-            "boundary terms with the box filter need pixel-edge terms: use the tent or gaussian filter"
-                .into(),
-        ));
-    }
-    let mut out = Vec::with_capacity(count);
-    for lo in (0..count).step_by(S::COUNT) {
-        let width = (count - lo).min(S::COUNT);
-        let windowed = window_slots(scene, lo, S::COUNT);
-        out.extend(pass::<S>(&windowed, width, options.render.seed, samples));
-    }
-    Ok(out)
+    check_supported(scene, "secondary")?;
+    Ok(in_windows::<S>(scene, count, |windowed, width| {
+        pass::<S>(windowed, width, options.render.seed, samples)
+    }))
 }
 
 /// One pass over all boundary samples: directions `0..width` of `S`.
