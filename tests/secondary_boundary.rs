@@ -9,7 +9,7 @@ use implicit_psdr::film::{Filter, Image};
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
 use implicit_psdr::integrator::derivative::Normalization;
 use implicit_psdr::integrator::derivative::{
-    DiffOptions, render_derivatives, render_derivatives_with_secondary,
+    DiffOptions, render_derivatives, render_derivatives_with_boundary,
 };
 use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
@@ -152,7 +152,7 @@ fn terms(name: &str, h: f32, spp: u32, boundary: u64, fd_spp: u32) -> [Vec<f64>;
     let mut scene = shadow_scene();
     scene.select_parameters(&[name.to_string()]).unwrap();
     let opts = diff_options(spp, 7);
-    let out = render_derivatives_with_secondary(&scene, 1, &opts, boundary).unwrap();
+    let out = render_derivatives_with_boundary(&scene, 1, &opts, 0, boundary).unwrap();
     let plain = render_derivatives(&scene, 1, &opts).unwrap();
     assert_eq!(out.interior, plain.interior);
     assert!(plain.secondary.is_empty());
@@ -266,7 +266,7 @@ fn lone_sphere_has_no_secondary_term() {
         assert!(plain.secondary.is_empty());
         assert_eq!(plain.total(), plain.interior);
         let with =
-            render_derivatives_with_secondary(&scene, 2, &diff_options(2, 3), 5_000).unwrap();
+            render_derivatives_with_boundary(&scene, 2, &diff_options(2, 3), 0, 5_000).unwrap();
         assert_eq!(with.interior, plain.interior);
         assert_eq!(with.total(), plain.interior);
         assert_eq!(out.len(), 2);

@@ -69,7 +69,7 @@ pub struct DerivativeImages {
     pub interior: Vec<Image>,
     /// `secondary[k]`: the secondary boundary term (shadows, [`super::boundary::secondary`]) for slot
     /// `k`; empty when it was not computed ([`render_derivatives`] leaves it empty,
-    /// [`render_derivatives_with_secondary`] fills it).
+    /// [`render_derivatives_with_boundary`] fills it).
     pub secondary: Vec<Image>,
     /// `primary[k]`: the primary boundary term (silhouettes seen by the camera,
     /// [`super::boundary::primary`]) for slot `k`; empty when it was not computed.
@@ -179,23 +179,6 @@ pub fn render_derivatives_in<S: Directions>(
         primary: Vec::new(),
         stats,
     })
-}
-
-/// [`render_derivatives`] plus the secondary boundary term with `boundary_samples` boundary samples for
-/// the whole image ([`super::boundary::secondary::render_secondary`], same seed). Errors as both; the
-/// secondary term exists for the `direct` integrator only.
-pub fn render_derivatives_with_secondary(
-    scene: &Scene,
-    count: usize,
-    options: &DiffOptions,
-    boundary_samples: u64,
-) -> Result<DerivativeImages> {
-    let start = std::time::Instant::now();
-    let mut out = render_derivatives(scene, count, options)?;
-    out.secondary =
-        super::boundary::secondary::render_secondary(scene, count, options, boundary_samples)?;
-    out.stats.seconds = start.elapsed().as_secs_f64();
-    Ok(out)
 }
 
 /// [`render_derivatives`] plus the boundary terms: the primary term with `primary_samples` curve samples
