@@ -20,10 +20,12 @@
 //! pixel's own samples, bit for bit as [`super::render`].
 //!
 //! **Normalisation** (seed §3). `Fixed`: the estimate above. `Differentiable`: the derivative of `F_j /
-//! W_j`, `F_j` the estimate above (primal: the image) and `W_j = ∫ w_j J_film dA` estimated like the
-//! second term with `L = 1` (primal 1): `∂F_j − I_j ∂W_j`, which turns the second term into
-//! `Σ_s (L_s − I_j) ∂(w_j J_film)_s / …`, a control variate (`E[∂W_j] = 0` up to `W`'s own primary
-//! boundary term, which the boundary issue adds).
+//! W_j`, `F_j` the estimate above (primal: the image) and `W_j = ∫ w_j J_film J₁ dA` (`J₁` the first
+//! vertex's area factor, which `L` also carries) estimated like `F_j` with `L = 1` (primal 1): both terms,
+//! `(1/spp) Σ_{s ∈ j} ∂J₁` and the moving-filter term. The pixel's derivative is `∂F_j − I_j ∂W_j`, a
+//! control variate: `Σ_s (∂L_s − I_j ∂J₁)` and `Σ_s (L_s − I_j) ∂(w_j J_film)_s / …`. `E[∂W_j] = 0` only
+//! with `W`'s own primary boundary term ([`super::boundary::primary::PrimaryTerm::coverage`]), which
+//! [`render_derivatives_with_boundary`] adds; the interior alone is biased near silhouettes.
 //!
 //! Parameters are processed in passes of the scalar type's width (`DualN<N>` carries `N` directions); each
 //! pass traces the same paths (same seed), so passes agree on the image and on shared parameters.
@@ -46,8 +48,8 @@ pub enum Normalization {
     /// Pixel = mean of `w/p · L` over its samples; `W` is treated as the constant it is in expectation.
     #[default]
     Fixed,
-    /// Pixel = `F / W` with both sums differentiated (a control variate; unbiased only with `W`'s own
-    /// primary boundary term).
+    /// Pixel = `F / W` with both sums differentiated (a control variate; unbiased together with `W`'s
+    /// own primary boundary term, which [`render_derivatives_with_boundary`] adds).
     Differentiable,
 }
 
@@ -199,7 +201,8 @@ pub fn render_derivatives_with_boundary(
     }
     if primary_samples > 0 {
         out.primary =
-            super::boundary::primary::render_primary(scene, count, options, primary_samples)?;
+            super::boundary::primary::render_primary_terms(scene, count, options, primary_samples)?
+                .combine(&out.image, options.normalization);
     }
     out.stats.seconds = start.elapsed().as_secs_f64();
     Ok(out)
@@ -235,6 +238,9 @@ struct Row<S> {
     rgb: Vec<f32>,
     /// Per pixel of the row: the sum of its own samples' contributions in `S`.
     own: Vec<Vec3<S>>,
+    /// Per pixel of the row: the sum of its own samples' `∂J₁` (the first vertex's area factor), `W`'s
+    /// share of the first term.
+    own_w: Vec<S>,
     f: Vec<Vec3<S>>,
     w: Vec<S>,
     exhausted: u64,
@@ -271,6 +277,7 @@ fn render_pass<S: Directions>(
             let mut row = Row {
                 rgb: vec![0.0; row_len],
                 own: vec![Vec3::zero(); w as usize],
+                own_w: vec![S::zero(); w as usize],
                 f: vec![Vec3::zero(); band * w as usize],
                 w: vec![S::zero(); band * w as usize],
                 exhausted: 0,
@@ -322,8 +329,12 @@ fn render_pass<S: Directions>(
                         row.invalid_d += 1;
                         l = l.detach();
                     }
-                    // ∂L at a fixed filter weight: the pixel's own sample, as for the image.
+                    // ∂L at a fixed filter weight: the pixel's own sample, as for the image; W's
+                    // integrand is 1 · J₁.
                     row.own[x as usize] += l;
+                    if ok && let Some(a) = first {
+                        row.own_w[x as usize] += a.j - a.j.detach();
+                    }
                     let Some((px, py, scale)) = motion.filter(|_| ok) else {
                         continue;
                     };
@@ -362,6 +373,7 @@ fn render_pass<S: Directions>(
     // Gather the splats in a fixed order (source rows ascending): the same sums whatever the threads.
     let n = (w * h) as usize;
     let mut own = vec![Vec3::<S>::zero(); n];
+    let mut own_w = vec![S::zero(); n];
     let mut f_sum = vec![Vec3::<S>::zero(); n];
     let mut w_sum = vec![S::zero(); n];
     let mut image = Image::new(w, h);
@@ -372,6 +384,7 @@ fn render_pass<S: Directions>(
     for (y, row) in rows.iter().enumerate() {
         image.rgb[y * row_len..(y + 1) * row_len].copy_from_slice(&row.rgb);
         own[y * w as usize..(y + 1) * w as usize].copy_from_slice(&row.own);
+        own_w[y * w as usize..(y + 1) * w as usize].copy_from_slice(&row.own_w);
         for b in 0..band {
             let jy = y as i64 - reach + b as i64;
             if jy < 0 || jy >= hi {
@@ -390,12 +403,14 @@ fn render_pass<S: Directions>(
     let mut derivatives = vec![Image::new(w, h); width];
     let inv_spp = S::constant(1.0 / spp as f32);
     for p in 0..n {
-        // F = (own + motion)/spp with primal the image; W = 1 + (Σ ∂(w J)/(J Σw))/spp.
+        // F = (own + motion)/spp with primal the image; W = 1 + (Σ ∂J₁ + Σ ∂(w J)/(J Σw))/spp.
         let f = (own[p] + f_sum[p]) * inv_spp;
         let pixel = match options.normalization {
             Normalization::Fixed => f,
             // ∂(F/W) = ∂F/W − F ∂W/W² with W = 1 at the primal (seed §3, eq. 26).
-            Normalization::Differentiable => f - Vec3::constant(f.primal()) * (w_sum[p] * inv_spp),
+            Normalization::Differentiable => {
+                f - Vec3::constant(f.primal()) * ((own_w[p] + w_sum[p]) * inv_spp)
+            }
         };
         for (k, d) in derivatives.iter_mut().enumerate() {
             d.rgb[3 * p] = pixel.x.direction(k);

@@ -50,6 +50,21 @@
 //!
 //! averaged over the `N` samples of the whole image (own random stream [`PRIMARY_STREAM`]).
 //!
+//! # Pixel normalisation (seed §3)
+//!
+//! With `differentiable` normalisation pixel `j` is `F_j / W_j`, `W_j = ∫ w_j J_film J₁ dA` the filter's
+//! own integral over the first vertices, `F_j`'s integrand with `L ≡ 1` (1 at the primal). Its visibility
+//! jumps across the same curves `Γ` and splits the same way: the occluder's side is the interior's
+//! ([`super::super::derivative`] estimates `W` with the moving filter), the background's is
+//!
+//! ```text
+//!   ∂W_j ⊃ ∫_Γ w_j(u) (−1) v dℓ_img                                                                  (3)
+//! ```
+//!
+//! sampled with the same points as (2) ([`PrimaryTerm::coverage`]). The pixel's derivative
+//! `∂F_j − I_j ∂W_j` turns the jump `−L_bg` into `I_j − L_bg` ([`PrimaryTerm::combine`]). Without (3)
+//! the `differentiable` derivative is biased by `I_j ∮ w_j v dℓ` (the sphere test measures it).
+//!
 //! # The image-space velocity `v` by AD
 //!
 //! Let the parameters move with the background point held: the ray from the lifted eye `c(π)` is
@@ -82,7 +97,7 @@ use super::{check_supported, in_windows};
 use crate::error::Result;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
-use crate::integrator::derivative::{DiffOptions, Directions, dispatch_directions};
+use crate::integrator::derivative::{DiffOptions, Directions, Normalization, dispatch_directions};
 use crate::integrator::path::{
     PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
 };
@@ -101,8 +116,9 @@ pub const PRIMARY_STREAM: u64 = 0x9121_B0DA;
 const CHUNK: u64 = 256;
 
 /// The primary boundary term of the derivative with respect to the parameters in slots `0..count`
-/// (selected with [`Scene::select_parameters`]), estimated with `samples` silhouette samples for the
-/// whole image (see the [module docs](self)). One image per parameter, the layout of
+/// (selected with [`Scene::select_parameters`]) for the `fixed` pixel normalisation, estimated with
+/// `samples` silhouette samples for the whole image (see the [module docs](self)): the
+/// [`PrimaryTerm::radiance`] part of [`render_primary_terms`]. One image per parameter, the layout of
 /// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
 /// Errors: an integrator other than `direct`, a box pixel filter, a failed curve extraction.
@@ -112,21 +128,68 @@ pub fn render_primary(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
+    Ok(render_primary_terms(scene, count, options, samples)?.radiance)
+}
+
+/// Both parts of the primary boundary term, from one set of silhouette samples: the radiance jump
+/// (`Δ = −L_bg`, eq. (2)) and the jump of the pixel filter's own integral `W` (`Δ = −1`, eq. (3)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimaryTerm {
+    /// `radiance[k]`: the primary term of `∂F` for slot `k` (the whole term with `fixed` normalisation).
+    pub radiance: Vec<Image>,
+    /// `coverage[k]`: `W`'s primary term for slot `k`, the same value in the three channels.
+    pub coverage: Vec<Image>,
+}
+
+impl PrimaryTerm {
+    /// The primary term of each pixel's derivative under `normalization`: `radiance` (`fixed`), or
+    /// `radiance − I ⊙ coverage` (`differentiable`, eq. (3)), `image` the rendered pixels `I`.
+    pub fn combine(&self, image: &Image, normalization: Normalization) -> Vec<Image> {
+        match normalization {
+            Normalization::Fixed => self.radiance.clone(),
+            Normalization::Differentiable => self
+                .radiance
+                .iter()
+                .zip(&self.coverage)
+                .map(|(r, c)| {
+                    let mut out = r.clone();
+                    for ((o, cv), i) in out.rgb.iter_mut().zip(&c.rgb).zip(&image.rgb) {
+                        *o -= i * cv;
+                    }
+                    out
+                })
+                .collect(),
+        }
+    }
+}
+
+/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` silhouette samples for the whole
+/// image. Errors as [`render_primary`].
+pub fn render_primary_terms(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    samples: u64,
+) -> Result<PrimaryTerm> {
     dispatch_directions!(count, render_primary_in(scene, count, options, samples))
 }
 
-/// [`render_primary`] with a chosen scalar type, in passes of `S::COUNT` parameters.
+/// [`render_primary_terms`] with a chosen scalar type, in passes of `S::COUNT` parameters.
 pub fn render_primary_in<S: Directions>(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,
     samples: u64,
-) -> Result<Vec<Image>> {
+) -> Result<PrimaryTerm> {
     check_supported(scene, "primary")?;
     let curves = silhouettes(scene)?;
-    Ok(in_windows::<S>(scene, count, |windowed, width| {
-        pass::<S>(windowed, &curves, width, options.render.seed, samples)
-    }))
+    let mut coverage = Vec::with_capacity(count);
+    let radiance = in_windows::<S>(scene, count, |windowed, width| {
+        let (r, c) = pass::<S>(windowed, &curves, width, options.render.seed, samples);
+        coverage.extend(c);
+        r
+    });
+    Ok(PrimaryTerm { radiance, coverage })
 }
 
 /// The silhouette curves seen from the camera centre of every shape with finite bounds (non-empty only).
@@ -153,13 +216,14 @@ fn pass<S: Directions>(
     width: usize,
     seed: u64,
     samples: u64,
-) -> Vec<Image> {
+) -> (Vec<Image>, Vec<Image>) {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mut images = vec![Image::new(w, h); width];
+    let mut coverage = vec![Image::new(w, h); width];
     if curves.is_empty() || samples == 0 {
-        return images;
+        return (images, coverage);
     }
-    let chunks: Vec<Vec<(usize, Vec3<S>)>> = (0..samples.div_ceil(CHUNK))
+    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut splats = Vec::new();
@@ -183,23 +247,32 @@ fn pass<S: Directions>(
         .collect();
     let inv = 1.0 / samples as f64;
     // Sum in f64 in sample order: the same result whatever the thread count.
-    let mut acc = vec![0.0f64; 3 * width * (w * h) as usize];
-    for (pixel, v) in chunks.iter().flatten() {
+    let n = (w * h) as usize;
+    let mut acc = vec![0.0f64; 3 * width * n];
+    let mut acc_w = vec![0.0f64; width * n];
+    for (pixel, v, c) in chunks.iter().flatten() {
         for k in 0..width {
-            let base = 3 * (k * (w * h) as usize + pixel);
+            let base = 3 * (k * n + pixel);
             acc[base] += v.x.direction(k) as f64;
             acc[base + 1] += v.y.direction(k) as f64;
             acc[base + 2] += v.z.direction(k) as f64;
+            acc_w[k * n + pixel] += c.direction(k) as f64;
         }
     }
-    for (k, image) in images.iter_mut().enumerate() {
-        let (off, len) = (3 * k * (w * h) as usize, image.rgb.len());
-        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + len]) {
+    for (k, (image, cov)) in images.iter_mut().zip(&mut coverage).enumerate() {
+        let off = 3 * k * n;
+        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + 3 * n]) {
             *d = (a * inv) as f32;
         }
+        for (d, a) in cov.rgb.chunks_exact_mut(3).zip(&acc_w[k * n..(k + 1) * n]) {
+            d.fill((a * inv) as f32);
+        }
     }
-    images
+    (images, coverage)
 }
+
+/// One splat: a pixel, its share of the radiance jump (eq. (2)) and of `W`'s jump (eq. (3)).
+type Splat<S> = (usize, Vec3<S>, S);
 
 /// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
 fn sample<S: Directions>(
@@ -208,7 +281,7 @@ fn sample<S: Directions>(
     curves: &[(usize, SilhouetteCurve)],
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut Vec<(usize, Vec3<S>)>,
+    splats: &mut Vec<Splat<S>>,
     counters: &mut TraceCounters,
 ) {
     let k = curves.len();
@@ -295,9 +368,6 @@ fn sample<S: Directions>(
         counters,
     );
     let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
-    if l_bg == glam::Vec3::ZERO {
-        return;
-    }
     // v = −∂πh / rate, relative to the background's own parametrisation (module docs): the ray from the
     // moving eye towards the attached x_D, or through the fixed film point for a background at infinity.
     let fs = scene.camera.frame::<S>();
@@ -313,16 +383,20 @@ fn sample<S: Directions>(
     .normalize_or_zero();
     let h = shape.eval(fs.origin + d_s * S::constant(dist));
     let v = -(h - h.detach()) / rate;
-    // Δ = blocked − clear = 0 − L_bg (module docs: the occluder's own side is the interior's).
-    let scale = -l_bg * (len_img * k as f32 / cs.pdf as f32);
-    if scale == glam::Vec3::ZERO || !scale.is_finite() {
+    // Δ = blocked − clear = 0 − L_bg (module docs: the occluder's own side is the interior's), and
+    // −1 for W (eq. (3)).
+    let measure = len_img * k as f32 / cs.pdf as f32;
+    let scale = -l_bg * measure;
+    if !(scale.is_finite() && measure.is_finite()) {
         return;
     }
     let value = Vec3::<S>::constant(scale) * v;
+    let cover = v * S::constant(-measure);
     if !(0..S::COUNT).all(|k| {
         value.x.direction(k).is_finite()
             && value.y.direction(k).is_finite()
             && value.z.direction(k).is_finite()
+            && cover.direction(k).is_finite()
     }) {
         return;
     }
@@ -341,7 +415,8 @@ fn sample<S: Directions>(
             }
             let fw = filter.eval::<f32>(dx, dy);
             if fw != 0.0 {
-                splats.push(((jy * w + jx) as usize, value * S::constant(fw)));
+                let fw = S::constant(fw);
+                splats.push(((jy * w + jx) as usize, value * fw, cover * fw));
             }
         }
     }
