@@ -87,8 +87,9 @@ enum Command {
         /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it.
         #[arg(long, default_value_t = DEFAULT_SPP_PRIMARY)]
         spp_primary: u32,
-        /// Pixel normalisation: `fixed` (the filter-weight sum is a constant) or `differentiable`.
-        #[arg(long, value_enum, default_value_t = NormalizationArg::Fixed)]
+        /// Pixel normalisation: `differentiable` (F / W, both differentiated: lower error) or `fixed`
+        /// (the filter-weight sum is a constant).
+        #[arg(long, value_enum, default_value_t = NormalizationArg::Differentiable)]
         normalization: NormalizationArg,
         /// Output EXR file.
         #[arg(long, default_value = "diff.exr")]

@@ -56,7 +56,8 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
             seed,
             progress: false,
         },
-        ..DiffOptions::default()
+        // The terms are computed separately here: `render_primary` is the `fixed` normalisation's.
+        normalization: Normalization::Fixed,
     }
 }
 

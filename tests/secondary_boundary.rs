@@ -143,7 +143,9 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
             seed,
             progress: false,
         },
-        ..DiffOptions::default()
+        // Terms are compared without the primary term: with `fixed` normalisation the interior needs
+        // no share of it.
+        normalization: Normalization::Fixed,
     }
 }
 

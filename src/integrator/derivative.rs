@@ -46,10 +46,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub enum Normalization {
     /// Pixel = mean of `w/p · L` over its samples; `W` is treated as the constant it is in expectation.
-    #[default]
     Fixed,
     /// Pixel = `F / W` with both sums differentiated (a control variate; unbiased together with `W`'s
-    /// own primary boundary term, which [`render_derivatives_with_boundary`] adds).
+    /// own primary boundary term, which [`render_derivatives_with_boundary`] adds). The default: at the
+    /// same cost its error is lower (default scene, 64 spp: relative L2 against FD 0.15 instead of 0.49
+    /// for `ball.radius`, README "Pixel normalisation").
+    #[default]
     Differentiable,
 }
 
