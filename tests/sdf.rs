@@ -740,3 +740,19 @@ fn bake_samples_on_the_box_faces() {
     assert!(close(*g.values.last().unwrap(), s.eval_f32(hi), 1e-5));
     assert_eq!(implicit_psdr::sdf::bake_dims(lo, hi, 2), [4, 4, 4]);
 }
+
+/// Flat pieces only: planes, sharp boxes and hard CSG of them; anything rounded or curved is not.
+#[test]
+fn piecewise_flat_shapes() {
+    let sharp = Sdf::cuboid([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], 0.0);
+    let rounded = Sdf::cuboid([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], 0.1);
+    let plane = Sdf::plane(Vec3::Y, 0.0);
+    let ball = Sdf::sphere([0.0, 0.0, 0.0], 1.0);
+    assert!(sharp.is_piecewise_flat());
+    assert!(plane.is_piecewise_flat());
+    assert!(Sdf::Union(vec![sharp.clone(), plane.clone()]).is_piecewise_flat());
+    assert!(!rounded.is_piecewise_flat());
+    assert!(!ball.is_piecewise_flat());
+    assert!(!Sdf::Difference(vec![sharp.clone(), ball.clone()]).is_piecewise_flat());
+    assert!(!Sdf::smooth_union(vec![sharp.clone(), plane], 0.1).is_piecewise_flat());
+}

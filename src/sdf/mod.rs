@@ -358,6 +358,23 @@ impl Sdf {
     }
 }
 
+impl Sdf {
+    /// Whether the surface is made of flat pieces only (planes, sharp boxes, hard CSG of them): its
+    /// curvature is 0 wherever it is smooth, so it has no smooth silhouettes (`κ_n = 0` along every
+    /// tangent line) and the boundary estimators skip it. Its crease edges are another matter.
+    pub fn is_piecewise_flat(&self) -> bool {
+        match self {
+            Sdf::Plane { .. } => true,
+            Sdf::Box { rounding, .. } => rounding.value == 0.0,
+            Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
+                children.iter().all(Sdf::is_piecewise_flat)
+            }
+            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.is_piecewise_flat(),
+            _ => false,
+        }
+    }
+}
+
 /// `κ = (tr H − gᵀHg/|g|²)/|g|`, guarded: 0 where `|g|` vanishes or the result is not finite.
 fn curvature_from(g: glam::Vec3, h: glam::Mat3) -> f32 {
     let g2 = g.length_squared();

@@ -192,13 +192,14 @@ pub fn render_primary_in<S: Directions>(
     Ok(PrimaryTerm { radiance, coverage })
 }
 
-/// The silhouette curves seen from the camera centre of every shape with finite bounds (non-empty only).
+/// The silhouette curves seen from the camera centre of every shape with finite bounds and curved
+/// surfaces ([`crate::sdf::Sdf::is_piecewise_flat`]; non-empty curves only).
 pub fn silhouettes(scene: &Scene) -> Result<Vec<(usize, SilhouetteCurve)>> {
     let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
     let mut curves = Vec::new();
     for (i, shape) in scene.shapes.iter().enumerate() {
         let b = shape.bounds;
-        if !b.is_finite() || b.is_empty() {
+        if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() {
             continue;
         }
         let curve = extract_silhouette(shape, eye, &CurveOptions::default())?;

@@ -31,8 +31,8 @@
 //! [`super::segment`] (eq. (A) there; the seed's eq. 23 misses `sin∠(c_t, c_n)`):
 //! `dA(x_S) dℓ(x_D) = J dA(x_B) dθ_B`, `J = |x_S x_B| |x_S x_D| κ_n / (|n_S·ω| sin θ_D)`.
 //!
-//! One boundary sample: pick a shape `M` uniformly among the `K` area-samplable shapes (finite bounds;
-//! unbounded shapes such as planes have no silhouettes of their own), draw one line of
+//! One boundary sample: pick a shape `M` uniformly among the `K` area-samplable curved shapes (finite
+//! bounds, not [`crate::sdf::Sdf::is_piecewise_flat`]: planes and sharp boxes have no smooth silhouettes), draw one line of
 //! [`sample_surface`] (every crossing `x_B` kept, each with the exact hit density `p_A(x_B)`), and for
 //! each `x_B` one angle `θ_B` uniform in `[0, π)` in an orthonormal tangent frame (density `1/π`). The
 //! unoriented line `x_B + t ω`, `ω = cos θ_B t₁ + sin θ_B t₂`, carries **two** segments (`x_D` on either
@@ -120,8 +120,9 @@ fn pass<S: Directions>(scene: &Scene, width: usize, seed: u64, samples: u64) -> 
     let (w, h) = (scene.camera.width, scene.camera.height);
     let candidates: Vec<usize> = (0..scene.shapes.len())
         .filter(|&i| {
+            // Flat shapes have no silhouette directions (κ_n = 0): sampling them would waste samples.
             let b = scene.shapes[i].bounds;
-            b.is_finite() && !b.is_empty()
+            b.is_finite() && !b.is_empty() && !scene.shapes[i].sdf.is_piecewise_flat()
         })
         .collect();
     let mut images = vec![Image::new(w, h); width];
@@ -170,7 +171,8 @@ fn pass<S: Directions>(scene: &Scene, width: usize, seed: u64, samples: u64) -> 
 struct Context<'a> {
     scene: &'a Scene,
     attach: SceneAttach<'a>,
-    /// Shapes with finite bounds (the ones [`sample_surface`] can sample), chosen uniformly.
+    /// Curved shapes with finite bounds (the ones [`sample_surface`] can sample and whose tangent lines
+    /// can be silhouettes), chosen uniformly.
     candidates: Vec<usize>,
 }
 
