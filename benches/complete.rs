@@ -31,9 +31,9 @@ const REF_SPP: u32 = 4096;
 const H: f32 = 0.01;
 /// The error to reach.
 const TARGET: f64 = 0.05;
-/// `diff`'s default boundary budgets per pixel, relative to the scene's 64 spp.
-const PRIMARY_PER_SPP: f64 = 16.0 / 64.0;
-const SECONDARY_PER_SPP: f64 = 64.0 / 64.0;
+/// `diff`'s default boundary budgets per pixel (16 and 64), relative to the scene's 64 spp.
+const PRIMARY_PER_SPP: f64 = 0.25;
+const SECONDARY_PER_SPP: f64 = 1.0;
 
 fn default_scene() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
