@@ -1,0 +1,92 @@
+//! The README's picture of the derivative's terms: for one parameter of a scene, a row of panels
+//! `image | interior | primary | secondary | total | fd`, the derivative panels on one symmetric colour
+//! scale (blue negative, white zero, red positive; the scale of the `fd` panel), written as a PNG.
+//!
+//! `cargo run --release --example terms_figure -- SCENE.json PARAM OUT.png [SIZE] [SPP]`
+//! (defaults: 128 px wide, 256 spp; `fd` at 8× the spp with `h = 0.01·max(|P|, 1)`).
+
+use implicit_psdr::film::colormap::{derivative_panel, diverging, side_by_side, srgb_decode};
+use implicit_psdr::film::{Image, write_png};
+use implicit_psdr::integrator::RenderOptions;
+use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives_with_boundary};
+use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::scene::load;
+use std::path::Path;
+
+/// A derivative panel on a given scale (mean of the three channels, as [`derivative_panel`]).
+fn panel(derivative: &Image, scale: f32) -> Image {
+    let mut out = Image::new(derivative.width, derivative.height);
+    for (o, p) in out
+        .rgb
+        .chunks_exact_mut(3)
+        .zip(derivative.rgb.chunks_exact(3))
+    {
+        let srgb = diverging((p[0] + p[1] + p[2]) / 3.0 / scale);
+        for (c, s) in o.iter_mut().zip(srgb) {
+            *c = srgb_decode(s);
+        }
+    }
+    out
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [scene_path, param, out] = &args[..3] else {
+        return Err("usage: terms_figure SCENE.json PARAM OUT.png [SIZE] [SPP]".into());
+    };
+    let size: u32 = args.get(3).map_or(Ok(128), |s| s.parse())?;
+    let spp: u32 = args.get(4).map_or(Ok(256), |s| s.parse())?;
+    let mut scene = load(Path::new(scene_path))?;
+    let aspect = scene.camera.height as f32 / scene.camera.width as f32;
+    scene.camera.width = size;
+    scene.camera.height = ((size as f32 * aspect).round() as u32).max(1);
+    let reference = scene.clone();
+    scene.select_parameters(std::slice::from_ref(param))?;
+    let pixels = (scene.camera.width * scene.camera.height) as u64;
+    let options = DiffOptions {
+        render: RenderOptions {
+            spp,
+            seed: 1,
+            progress: false,
+        },
+        ..DiffOptions::default()
+    };
+    // Boundary budgets in the proportions of `diff`'s defaults (16 and 64 per pixel at 64 spp).
+    let d = render_derivatives_with_boundary(
+        &scene,
+        1,
+        &options,
+        pixels * spp as u64 / 4,
+        pixels * spp as u64,
+    )?;
+    let value = reference
+        .parameters()
+        .into_iter()
+        .find(|(n, _)| n == param)
+        .map_or(1.0, |(_, v)| v);
+    let fd = finite_difference(
+        &reference,
+        param,
+        0.01 * value.abs().max(1.0),
+        &RenderOptions {
+            spp: 8 * spp,
+            seed: 2,
+            progress: false,
+        },
+    )?;
+    let (_, scale) = derivative_panel(&fd);
+    let total = d.total().remove(0);
+    let row = side_by_side(&[
+        d.image.clone(),
+        panel(&d.interior[0], scale),
+        panel(&d.primary[0], scale),
+        panel(&d.secondary[0], scale),
+        panel(&total, scale),
+        panel(&fd, scale),
+    ]);
+    write_png(Path::new(out), row.width, row.height, &row.rgb)?;
+    println!(
+        "{out}: image | interior | primary | secondary | total | fd for {param}; colour scale ±{scale:.3e}"
+    );
+    Ok(())
+}
