@@ -246,7 +246,19 @@ impl Context<'_> {
                 continue;
             }
             let o = scene.offset_origin(hit.p, hit.n, hit.n);
-            let ends = [omega, -omega].map(|d| scene.intersect(&Ray::new(o, d), f32::INFINITY));
+            // An exhausted trace counts as a miss, as in the integrator's own paths
+            // (`path::trace_path`, `occluded`): the primal treats such a line as escaping, so its
+            // derivative must too (typically a line leaving at a shallow angle above an infinite
+            // floor, which sphere tracing never finishes; dropping those lost the lower silhouettes'
+            // shadows in an environment-lit scene).
+            let ends =
+                [omega, -omega].map(|d| match scene.intersect(&Ray::new(o, d), f32::INFINITY) {
+                    Intersection::Exhausted => {
+                        counters.exhausted += 1;
+                        Intersection::Miss
+                    }
+                    end => end,
+                });
             for (s_end, d_end) in [(&ends[1], &ends[0]), (&ends[0], &ends[1])] {
                 self.segment(m, hit.p, s_end, d_end, weight, splats, counters);
             }
