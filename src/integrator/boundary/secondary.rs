@@ -66,6 +66,7 @@
 //! discontinuity of one-sided emitters and BSDFs across their tangent planes, crease edges.
 
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
+use super::tangent_sampling::{TangentSampler, TangentSampling};
 use super::{check_supported, in_windows};
 use crate::error::Result;
 use crate::film::Image;
@@ -78,7 +79,6 @@ use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scene::{Intersection, Scene, Surface};
 use rayon::prelude::*;
-use std::f32::consts::PI;
 
 /// The random stream of boundary samples (distinct from the camera's
 /// [`crate::integrator::CAMERA_STREAM`]).
@@ -99,24 +99,46 @@ pub fn render_secondary(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    dispatch_directions!(count, render_secondary_in(scene, count, options, samples))
+    render_secondary_with(scene, count, options, samples, TangentSampling::Steered)
 }
 
-/// [`render_secondary`] with a chosen scalar type, in passes of `S::COUNT` parameters.
+/// [`render_secondary`] with a chosen way of drawing the tangent angles `θ_B` (the default,
+/// [`TangentSampling::Steered`], has less variance; both have the same expectation).
+pub fn render_secondary_with(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    samples: u64,
+    tangent: TangentSampling,
+) -> Result<Vec<Image>> {
+    dispatch_directions!(
+        count,
+        render_secondary_in(scene, count, options, samples, tangent)
+    )
+}
+
+/// [`render_secondary_with`] with a chosen scalar type, in passes of `S::COUNT` parameters.
 pub fn render_secondary_in<S: Directions>(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,
     samples: u64,
+    tangent: TangentSampling,
 ) -> Result<Vec<Image>> {
     check_supported(scene, "secondary")?;
     Ok(in_windows::<S>(scene, count, |windowed, width| {
-        pass::<S>(windowed, width, options.render.seed, samples)
+        pass::<S>(windowed, width, options.render.seed, samples, tangent)
     }))
 }
 
 /// One pass over all boundary samples: directions `0..width` of `S`.
-fn pass<S: Directions>(scene: &Scene, width: usize, seed: u64, samples: u64) -> Vec<Image> {
+fn pass<S: Directions>(
+    scene: &Scene,
+    width: usize,
+    seed: u64,
+    samples: u64,
+    tangent: TangentSampling,
+) -> Vec<Image> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let candidates: Vec<usize> = (0..scene.shapes.len())
         .filter(|&i| {
@@ -133,6 +155,7 @@ fn pass<S: Directions>(scene: &Scene, width: usize, seed: u64, samples: u64) -> 
         scene,
         attach: SceneAttach::new(scene),
         candidates,
+        tangent: TangentSampler::new(scene, tangent),
     };
     let chunks: Vec<Vec<(usize, Vec3<S>)>> = (0..samples.div_ceil(CHUNK))
         .into_par_iter()
@@ -174,6 +197,8 @@ struct Context<'a> {
     /// Curved shapes with finite bounds (the ones [`sample_surface`] can sample and whose tangent lines
     /// can be silhouettes), chosen uniformly.
     candidates: Vec<usize>,
+    /// Draws `θ_B` (towards the emitters).
+    tangent: TangentSampler,
 }
 
 /// The end `x_D` of a segment.
@@ -209,16 +234,33 @@ impl Context<'_> {
             counters.exhausted += 1;
         }
         for hit in hits.iter() {
-            let theta = PI * sampler.next_1d();
             let (t1, t2) = hit.n.any_orthonormal_pair();
+            let angles = self.tangent.distribution(hit.p, t1, t2, hit.n);
+            let theta = angles.sample(sampler.next_1d());
             let omega = t1 * theta.cos() + t2 * theta.sin();
             if !is_silhouette_direction(shape, hit.p, omega) {
                 continue;
             }
-            // 1 / (shape choice · hit density · angle density).
-            let weight = k as f32 * PI / hit.pdf;
+            // 1 / (shape choice · hit density · angle density); the mixture density is at least
+            // UNIFORM_SHARE / π and finite, `hit.pdf` positive and finite (sample_surface).
+            let weight = k as f32 / (hit.pdf * angles.pdf(theta));
+            if !weight.is_finite() {
+                continue;
+            }
             let o = scene.offset_origin(hit.p, hit.n, hit.n);
-            let ends = [omega, -omega].map(|d| scene.intersect(&Ray::new(o, d), f32::INFINITY));
+            // An exhausted trace counts as a miss, as in the integrator's own paths
+            // (`path::trace_path`, `occluded`): the primal treats such a line as escaping, so its
+            // derivative must too (typically a line leaving at a shallow angle above an infinite
+            // floor, which sphere tracing never finishes; dropping those lost the lower silhouettes'
+            // shadows in an environment-lit scene).
+            let ends =
+                [omega, -omega].map(|d| match scene.intersect(&Ray::new(o, d), f32::INFINITY) {
+                    Intersection::Exhausted => {
+                        counters.exhausted += 1;
+                        Intersection::Miss
+                    }
+                    end => end,
+                });
             for (s_end, d_end) in [(&ends[1], &ends[0]), (&ends[0], &ends[1])] {
                 self.segment(m, hit.p, s_end, d_end, weight, splats, counters);
             }
