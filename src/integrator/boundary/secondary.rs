@@ -1,6 +1,8 @@
-//! The secondary boundary term of the `direct` integrator (DESIGN.md §3 "Boundary integrals", seed §2):
-//! shadows, i.e. the visibility between a surface point `x_S` seen by the camera and an emitter point
-//! `x_D`, which jumps where the segment `x_S x_D` touches an occluder `M` tangentially at `x_B`.
+//! The secondary boundary term (DESIGN.md §3 "Boundary integrals", seed §2): shadows, i.e. the
+//! visibility between a surface point `x_S` and the next vertex `x_D` of a path (an emitter point for
+//! the `direct` integrator), which jumps where the segment `x_S x_D` touches an occluder `M`
+//! tangentially at `x_B`. The derivation below is the `direct` case; the section "The path integrator"
+//! extends it to every segment of a path.
 //!
 //! # The integral
 //!
@@ -61,9 +63,44 @@
 //! starts on a shape, so (2) is exactly 0. A scene contributes only where a segment from a visible
 //! shape point to an emitter grazes an occluder.
 //!
-//! **Scope.** Only the `direct` integrator (paths `x₀ x_S x_D`); other integrators are refused with
-//! [`crate::Error::Unsupported`]. Not included: the primary boundary (silhouettes seen from the camera), the
-//! discontinuity of one-sided emitters and BSDFs across their tangent planes, crease edges.
+//! # The path integrator
+//!
+//! With `max_depth = D` the primal's expectation is the sum over path lengths of the path integrals
+//! `∫ f(x̄) dA(x₁) … dA(x_{k+1})` over paths `x₀ x₁ … x_k x_{k+1}` with `k ≤ D` scattering vertices on
+//! shapes and `x_{k+1}` on an emitter (or a direction at infinity); next-event estimation, BSDF sampling
+//! and their MIS weights only choose how it is estimated, so any unbiased estimator of the same
+//! integrals differentiates it. Every segment `x_i x_{i+1}`, `i ≥ 1`, carries a visibility; the
+//! segment `x₀ x₁` is the primary term's. For the segment with `x_S = x_i` (the `i`-th scattering
+//! vertex) and `x_D = x_{i+1}`, the path contribution factors as
+//! `f(x̄) = W_i(x_S → x_D) · G(x_S, x_D) V(x_S, x_D) · L(x_D → x_S)`: the camera factor (pixel filter,
+//! `J_film` and every BSDF, geometry term and visibility from `x₀` to `x_S`, the BSDF at `x_S`
+//! included, the other vertices integrated by area) times the radiance leaving `x_D` (its emission if
+//! it is an emitter, else what the vertices after it bring). Only `V(x_S, x_D)` jumps across this
+//! segment's boundary, so with the measure `dA(x_S) dℓ(x_D)` and `J` of eq. (A) in [`super::segment`]
+//! (in its directional form at infinity)
+//!
+//! ```text
+//!   ∂I_j ⊃ Σ_i ∫ dA(x_S) ∫_∂ dℓ(x_D)  Δf V_∂,   Δf = 0 − W_i G L(x_D → x_S)                          (3)
+//! ```
+//!
+//! estimated per boundary sample like (2): `Σ_i Ŵ_i · (−G L̂) · V_∂ · J · K π / p_A(x_B)`, with the
+//! camera factor `Ŵ_i` of an adjoint walk from `x_S` connected to the camera at each of its vertices and
+//! `L̂` a path continued from `x_D` with the primal's own estimator ([`super::subpaths`], which derives
+//! both and their unbiasedness). `x_S` need not be visible from the camera any more (it is for
+//! `i = 1`), and `x_D` may be a shape point. Path length: `x_S` is the `i`-th scattering vertex; an
+//! emitter or environment end needs `i ≤ D`, a shape end scatters at `x_D` too and the radiance is
+//! truncated after `D − i` scattering vertices counting `x_D`, which needs `i ≤ D − 1`. With `D = 1`
+//! only `i = 1` and emitter ends remain: the `direct` estimator (2) exactly, with the same random
+//! numbers (the walk draws nothing when it has no bounce to make).
+//!
+//! **Random numbers.** The subpaths of one oriented segment draw from their own stream
+//! ([`SUBPATH_STREAM`]) keyed on the bits of `x_B` and `x_S`: independent of the numbers the boundary
+//! sample drew (which `x_B` is a function of), deterministic whatever the thread count, and untouched by
+//! changes to how `(x_B, θ_B)` are drawn.
+//!
+//! **Scope.** Both integrators. Not included: the primary boundary (silhouettes seen from the camera,
+//! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
+//! crease edges.
 
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
@@ -96,7 +133,7 @@ const CHUNK: u64 = 256;
 /// image (see the [module docs](self)). One image per parameter, the layout of
 /// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
-/// Errors: an integrator other than `direct`, a box pixel filter.
+/// Errors: a box pixel filter.
 pub fn render_secondary(
     scene: &Scene,
     count: usize,
@@ -193,7 +230,8 @@ enum End {
 /// `x_S` (module docs, "Random numbers").
 fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
     let bits = |p: glam::Vec3| {
-        (p.x.to_bits() as u64 | (p.y.to_bits() as u64) << 32) ^ (p.z.to_bits() as u64).rotate_left(17)
+        (p.x.to_bits() as u64 | (p.y.to_bits() as u64) << 32)
+            ^ (p.z.to_bits() as u64).rotate_left(17)
     };
     Sampler::new(bits(x_b), SUBPATH_STREAM, bits(x_s), 0)
 }
