@@ -173,19 +173,21 @@ fn terms(name: &str, h: f32, seed: u64, fd_seed: u64) -> [Vec<f64>; 4] {
 /// `max_depth = 2` wall scene, as relative L2 after a 5×5 blur over the whole image and as sums over the
 /// floor and the wall pixels; without the secondary term the error must be large.
 ///
-/// Noise, measured with six seed pairs (estimator, FD) on `ball.center.x` (64 or 32 spp interior, 128 or
+/// Noise, measured with six seed pairs (estimator, FD) on `ball.center.x` (32 or 64 spp interior, 128 to
 /// 256 boundary samples per pixel, FD 256 or 512 spp): blurred relative L2 0.068–0.129, without the
 /// secondary term 0.74–0.81; total − FD over the floor −1.9…+1.5 (FD ≈ −9.8), over the wall −1.5…+3.5
-/// (FD ≈ 9.9), dominated by the interior term's noise (its wall sum ranges over −9.5…−4.3). On
-/// `light.center.x` (one seed pair) relative L2 0.016 (without the secondary term 0.165), floor and wall
-/// sums within 1.3% and 0.4%.
+/// (FD ≈ 9.9), dominated by the interior term's noise (its wall sum ranges over −9.5…−4.3); without the
+/// secondary term the floor sum has the wrong sign. On `light.center.x` (four seed pairs, these budgets):
+/// relative L2 0.016–0.019 (0.166–0.173 without the secondary term), floor sums within 1.3–1.9% and wall
+/// sums within 0.16–0.5% (without the secondary term about 9% and 3% off).
 #[test]
 fn path_derivatives_match_finite_differences() {
     let hits = first_hits(&wall_scene(IntegratorKind::Path { max_depth: 2 }));
-    // (name, h, blurred rel L2 bound, bound without the secondary term (lower), sum tolerance)
+    // (name, h, blurred rel L2 bound, lower bound without the secondary term, floor and wall sum
+    // tolerances)
     for (name, h, l2, l2_without, sum_tol) in [
-        ("ball.center.x", 0.04f32, 0.2, 0.5, 0.35),
-        ("light.center.x", 0.05, 0.06, 0.12, 0.05),
+        ("ball.center.x", 0.04f32, 0.2, 0.5, [0.3, 0.35]),
+        ("light.center.x", 0.05, 0.05, 0.12, [0.05, 0.015]),
     ] {
         let [i, p, s, f] = terms(name, h, 7, 11);
         let total = add(&add(&i, &p), &s);
@@ -201,9 +203,10 @@ fn path_derivatives_match_finite_differences() {
                 sum_where(&s, &hits, shape),
             );
             assert!(sf.abs() > 1.0, "{name}: the {label} must respond ({sf})");
+            let tol = sum_tol[shape];
             assert!(
-                (st - sf).abs() <= sum_tol * sf.abs(),
-                "{name}: {label} sum {st} vs FD {sf} (tolerance {sum_tol})"
+                (st - sf).abs() <= tol * sf.abs(),
+                "{name}: {label} sum {st} vs FD {sf} (tolerance {tol})"
             );
         }
         assert!(lt < l2, "{name}: relative L2 {lt} (bound {l2})");
