@@ -10,7 +10,7 @@ use implicit_psdr::film::{Image, colormap};
 use implicit_psdr::integrator::derivative::{
     DiffOptions, Normalization, render_derivatives, render_derivatives_with_boundary,
 };
-use implicit_psdr::integrator::{self, IntegratorKind, RenderOptions, fd};
+use implicit_psdr::integrator::{self, RenderOptions, fd};
 use implicit_psdr::{compare, film, scene, sdf};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -460,7 +460,7 @@ fn terms_note(interior_only_reason: Option<&str>, budget: &BoundaryBudget) -> St
     };
     format!(
         "note: derivatives hold the {held} terms{missing}; not yet handled: creases, emitter edges \
-         seen directly, image borders, and the path integrator's boundary terms"
+         seen directly, image borders"
     )
 }
 
@@ -507,11 +507,9 @@ fn diff(
         render: render_options(&scene, spp, seed),
         normalization,
     };
-    // The boundary terms exist for the direct integrator; elsewhere the interior term stands alone
-    // and the note says so.
-    let interior_only = if scene.integrator != IntegratorKind::Direct {
-        Some("boundary terms exist for the direct integrator only")
-    } else if budget.primary == 0 && budget.secondary == 0 {
+    // Both integrators have both boundary terms; without a budget for either the interior term stands
+    // alone and the note says so.
+    let interior_only = if budget.primary == 0 && budget.secondary == 0 {
         Some("--spp-primary and --spp-secondary are 0")
     } else {
         None

@@ -215,6 +215,50 @@ fn diff_writes_the_promised_channels() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A `path` scene gets both boundary terms too, and the note says so.
+#[test]
+fn diff_adds_the_boundary_terms_of_path_scenes() {
+    let dir = workdir("diff-path");
+    write_scene(&dir, |v| {
+        v["integrator"] = serde_json::json!({"type": "path", "max_depth": 2});
+    });
+    let out = run(
+        &dir,
+        &[
+            "diff",
+            "scene.json",
+            "--param",
+            "ball.radius",
+            "--spp",
+            "1",
+            "--spp-secondary",
+            "8",
+            "--spp-primary",
+            "4",
+            "--terms",
+        ],
+    );
+    let stdout = assert_success(&out);
+    assert!(
+        stdout.contains(
+            "note: derivatives hold the interior, secondary (shadow) and primary (silhouette) terms"
+        ),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("path integrator"), "{stdout}");
+    let (_, _, names) = exr_channels(&dir.join("diff.exr"));
+    let expected = [
+        rgb(""),
+        rgb("d.ball.radius."),
+        rgb("d_interior.ball.radius."),
+        rgb("d_primary.ball.radius."),
+        rgb("d_secondary.ball.radius."),
+    ]
+    .concat();
+    assert_eq!(names, sorted(expected));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn fd_writes_the_promised_channels() {
     let dir = workdir("fd");

@@ -12,6 +12,7 @@ pub mod primary;
 pub mod secondary;
 pub mod segment;
 pub mod tangent_sampling;
+pub mod subpaths;
 
 pub use segment::{
     BoundarySegment, boundary_jacobian, boundary_velocity, is_silhouette_direction,
@@ -20,24 +21,18 @@ pub use segment::{
 
 use crate::error::{Error, Result};
 use crate::film::Image;
-use crate::integrator::IntegratorKind;
 use crate::integrator::attach::window_slots;
 use crate::integrator::derivative::Directions;
 use crate::scene::Scene;
 
-/// The boundary terms exist for the `direct` integrator and continuous pixel filters; `term` names the
-/// term in the error.
+/// The boundary terms exist for both integrators (`direct` is `path` with one scattering vertex) and
+/// continuous pixel filters; `term` names the term in the error.
 fn check_supported(scene: &Scene, term: &str) -> Result<()> {
-    if scene.integrator != IntegratorKind::Direct {
-        return Err(Error::Unsupported(format!(
-            "the {term} boundary term is implemented for the direct integrator only"
-        )));
-    }
     if !scene.camera.filter.is_continuous() {
-        return Err(Error::Unsupported(
-            "boundary terms with the box filter need pixel-edge terms: use the tent or gaussian filter"
-                .into(),
-        ));
+        return Err(Error::Unsupported(format!(
+            "the {term} boundary term with the box filter needs pixel-edge terms: use the tent or \
+             gaussian filter"
+        )));
     }
     Ok(())
 }

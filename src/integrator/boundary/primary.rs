@@ -1,5 +1,5 @@
-//! The primary boundary term of the `direct` integrator (DESIGN.md §3 "Boundary integrals", seed §2 with
-//! `x_S = c` the camera centre): silhouettes of shapes seen from the camera.
+//! The primary boundary term (DESIGN.md §3 "Boundary integrals", seed §2 with `x_S = c` the camera
+//! centre): silhouettes of shapes seen from the camera, for both integrators.
 //!
 //! # The integral, in film space
 //!
@@ -81,16 +81,21 @@
 //!
 //! # The background radiance
 //!
-//! A detached `f32` estimate (its derivative is second order in (1)): one camera path
-//! ([`trace_path`], the `direct` integrator's own estimator) along the ray from `c` towards
+//! A detached `f32` estimate (its derivative is second order in (1)): one camera path ([`trace_path`]
+//! with the scene's `max_scatter`: the integrator's own estimator) along the ray from `c` towards
 //! `x_B + δ n_B`, `δ` = 1/50 of a pixel at `x_B`'s distance (at least `4 eps`); its first vertex is
 //! `x_D`. `x_B` must be visible: that ray must not hit anything before `x_B`'s depth (less a margin),
 //! else the sample contributes 0. Points of the curve where the view ray is not a silhouette direction (`κ_n ≤ 0`:
 //! the ray enters the solid on both sides) contribute 0.
 //!
-//! **Scope.** `direct` only (the side radiances use its estimator; other integrators are refused with
-//! [`crate::Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own). Not
-//! included: edges of finite emitters seen directly, crease edges, the film edges.
+//! **Path integrator.** Nothing above depends on what follows `x_D`: (1) is the jump of the camera
+//! segment's visibility, `L_background` is the whole radiance leaving `x_D` towards `c` with `x_D` the
+//! first of at most `max_depth` scattering vertices (exactly the primal's paths with `x₁ = x_D`), and the
+//! occluder side is the interior's moving filter whatever the rest of the path. Visibility jumps of the
+//! later segments are the secondary term's.
+//!
+//! **Scope.** Shapes with finite bounds (planes have no silhouettes of their own). Not included: edges of
+//! finite emitters seen directly, crease edges, the film edges.
 
 use super::segment::is_silhouette_direction;
 use super::{check_supported, in_windows};
@@ -121,7 +126,7 @@ const CHUNK: u64 = 256;
 /// [`PrimaryTerm::radiance`] part of [`render_primary_terms`]. One image per parameter, the layout of
 /// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
-/// Errors: an integrator other than `direct`, a box pixel filter, a failed curve extraction.
+/// Errors: a box pixel filter, a failed curve extraction.
 pub fn render_primary(
     scene: &Scene,
     count: usize,

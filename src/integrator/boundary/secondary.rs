@@ -1,6 +1,8 @@
-//! The secondary boundary term of the `direct` integrator (DESIGN.md §3 "Boundary integrals", seed §2):
-//! shadows, i.e. the visibility between a surface point `x_S` seen by the camera and an emitter point
-//! `x_D`, which jumps where the segment `x_S x_D` touches an occluder `M` tangentially at `x_B`.
+//! The secondary boundary term (DESIGN.md §3 "Boundary integrals", seed §2): shadows, i.e. the
+//! visibility between a surface point `x_S` and the next vertex `x_D` of a path (an emitter point for
+//! the `direct` integrator), which jumps where the segment `x_S x_D` touches an occluder `M`
+//! tangentially at `x_B`. The derivation below is the `direct` case; the section "The path integrator"
+//! extends it to every segment of a path.
 //!
 //! # The integral
 //!
@@ -61,18 +63,54 @@
 //! starts on a shape, so (2) is exactly 0. A scene contributes only where a segment from a visible
 //! shape point to an emitter grazes an occluder.
 //!
-//! **Scope.** Only the `direct` integrator (paths `x₀ x_S x_D`); other integrators are refused with
-//! [`crate::Error::Unsupported`]. Not included: the primary boundary (silhouettes seen from the camera), the
-//! discontinuity of one-sided emitters and BSDFs across their tangent planes, crease edges.
+//! # The path integrator
+//!
+//! With `max_depth = D` the primal's expectation is the sum over path lengths of the path integrals
+//! `∫ f(x̄) dA(x₁) … dA(x_{k+1})` over paths `x₀ x₁ … x_k x_{k+1}` with `k ≤ D` scattering vertices on
+//! shapes and `x_{k+1}` on an emitter (or a direction at infinity); next-event estimation, BSDF sampling
+//! and their MIS weights only choose how it is estimated, so any unbiased estimator of the same
+//! integrals differentiates it. Every segment `x_i x_{i+1}`, `i ≥ 1`, carries a visibility; the
+//! segment `x₀ x₁` is the primary term's. For the segment with `x_S = x_i` (the `i`-th scattering
+//! vertex) and `x_D = x_{i+1}`, the path contribution factors as
+//! `f(x̄) = W_i(x_S → x_D) · G(x_S, x_D) V(x_S, x_D) · L(x_D → x_S)`: the camera factor (pixel filter,
+//! `J_film` and every BSDF, geometry term and visibility from `x₀` to `x_S`, the BSDF at `x_S`
+//! included, the other vertices integrated by area) times the radiance leaving `x_D` (its emission if
+//! it is an emitter, else what the vertices after it bring). Only `V(x_S, x_D)` jumps across this
+//! segment's boundary, so with the measure `dA(x_S) dℓ(x_D)` and `J` of eq. (A) in [`super::segment`]
+//! (in its directional form at infinity)
+//!
+//! ```text
+//!   ∂I_j ⊃ Σ_i ∫ dA(x_S) ∫_∂ dℓ(x_D)  Δf V_∂,   Δf = 0 − W_i G L(x_D → x_S)                          (3)
+//! ```
+//!
+//! estimated per boundary sample like (2): `Σ_i Ŵ_i · (−G L̂) · V_∂ · J · K π / p_A(x_B)`, with the
+//! camera factor `Ŵ_i` of an adjoint walk from `x_S` connected to the camera at each of its vertices and
+//! `L̂` a path continued from `x_D` with the primal's own estimator ([`super::subpaths`], which derives
+//! both and their unbiasedness). `x_S` need not be visible from the camera any more (it is for
+//! `i = 1`), and `x_D` may be a shape point. Path length: `x_S` is the `i`-th scattering vertex; an
+//! emitter or environment end needs `i ≤ D`, a shape end scatters at `x_D` too and the radiance is
+//! truncated after `D − i` scattering vertices counting `x_D`, which needs `i ≤ D − 1`. With `D = 1`
+//! only `i = 1` and emitter ends remain: the `direct` estimator (2) exactly, with the same random
+//! numbers (the walk draws nothing when it has no bounce to make).
+//!
+//! **Random numbers.** The subpaths of one oriented segment draw from their own stream
+//! ([`SUBPATH_STREAM`]) keyed on the bits of `x_B` and `x_S`: independent of the numbers the boundary
+//! sample drew (which `x_B` is a function of), deterministic whatever the thread count, and untouched by
+//! changes to how `(x_B, θ_B)` are drawn.
+//!
+//! **Scope.** Both integrators. Not included: the primary boundary (silhouettes seen from the camera,
+//! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
+//! crease edges.
 
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
+use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
 use super::{check_supported, in_windows};
 use crate::error::Result;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::derivative::{DiffOptions, Directions, dispatch_directions};
-use crate::integrator::path::{TraceCounters, occluded};
+use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::shading::geometry_term;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::{Ray, Vec3};
@@ -84,6 +122,9 @@ use rayon::prelude::*;
 /// [`crate::integrator::CAMERA_STREAM`]).
 pub const BOUNDARY_STREAM: u64 = 0x5EC0_4DA2;
 
+/// The random stream of the subpaths (camera-side walk, light-side path) of a segment.
+pub const SUBPATH_STREAM: u64 = 0x5AB_9A7E;
+
 /// Boundary samples per parallel work item (results are gathered in sample order: deterministic).
 const CHUNK: u64 = 256;
 
@@ -92,7 +133,7 @@ const CHUNK: u64 = 256;
 /// image (see the [module docs](self)). One image per parameter, the layout of
 /// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
-/// Errors: an integrator other than `direct`, a box pixel filter.
+/// Errors: a box pixel filter.
 pub fn render_secondary(
     scene: &Scene,
     count: usize,
@@ -208,6 +249,18 @@ enum End {
     Emitter(usize, glam::Vec3, glam::Vec3),
     /// The environment emitter `e`, at infinity.
     Environment(usize),
+    /// A point of shape `i` with its normal (where the path scatters again).
+    Shape(usize, glam::Vec3, glam::Vec3),
+}
+
+/// The random numbers of the subpaths of one oriented segment: a stream keyed on the bits of `x_B` and
+/// `x_S` (module docs, "Random numbers").
+fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
+    let bits = |p: glam::Vec3| {
+        (p.x.to_bits() as u64 | (p.y.to_bits() as u64) << 32)
+            ^ (p.z.to_bits() as u64).rotate_left(17)
+    };
+    Sampler::new(bits(x_b), SUBPATH_STREAM, bits(x_s), 0)
 }
 
 impl Context<'_> {
@@ -267,8 +320,9 @@ impl Context<'_> {
         }
     }
 
-    /// The segment from the hit `s_end` through `x_b` (on shape `m`) to `d_end`, if it is a shadow
-    /// boundary of a visible point: pushes its contributions.
+    /// The segment from the hit `s_end` through `x_b` (on shape `m`) to `d_end`, if it is a
+    /// visibility boundary of some camera path: pushes its contributions (eq. (2), with the camera and
+    /// light sides of [`super::subpaths`] for integrators with several scattering vertices).
     #[allow(clippy::too_many_arguments)]
     fn segment<S: Directions>(
         &self,
@@ -281,6 +335,7 @@ impl Context<'_> {
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
+        let depth = scene.integrator.max_scatter();
         let Intersection::Hit(s_hit) = s_end else {
             return;
         };
@@ -290,6 +345,8 @@ impl Context<'_> {
         let end = match d_end {
             Intersection::Hit(h) => match h.surface {
                 Surface::Emitter(e) => End::Emitter(e, h.p, h.n),
+                // x_D scatters: the path needs one more scattering vertex than x_S's depth.
+                Surface::Shape(d) if depth >= 2 => End::Shape(d, h.p, h.n),
                 Surface::Shape(_) => return,
             },
             Intersection::Miss => match scene.environment {
@@ -302,45 +359,43 @@ impl Context<'_> {
             }
         };
         let (x_s, n_s) = (s_hit.p, s_hit.n);
-        // The camera must see x_S.
-        let frame = scene.camera.frame::<f32>();
-        let Some((px, py)) = frame.project(Vec3::constant(x_s)) else {
+        let Some(w) = (x_b - x_s).try_normalize() else {
             return;
         };
-        let filter = scene.camera.filter;
-        let radius = filter.radius();
-        let (wf, hf) = (scene.camera.width as f32, scene.camera.height as f32);
-        if px <= -radius || py <= -radius || px >= wf + radius || py >= hf + radius {
-            return;
-        }
-        let eye: glam::Vec3 = frame.origin.primal();
-        let to_s = x_s - eye;
-        let dist = to_s.length();
-        if !(dist > 0.0 && dist.is_finite()) {
-            return;
-        }
-        let margin = 8.0 * scene.trace.eps + 1e-5 * dist;
-        if occluded(
+        // The subpaths' numbers, keyed on the oriented segment (module docs, "Random numbers").
+        let mut sampler = subpath_sampler(x_b, x_s);
+        let frame = scene.camera.frame::<f32>();
+        let max_k = match end {
+            End::Shape(..) => depth - 1,
+            _ => depth,
+        };
+        let mut cams = Vec::new();
+        camera_side(
             scene,
-            &Ray::new(eye, to_s / dist),
-            dist - margin,
-            None,
+            &frame,
+            si,
+            x_s,
+            n_s,
+            w,
+            max_k,
+            &mut sampler,
+            &mut cams,
             counters,
-        ) {
+        );
+        if cams.is_empty() {
             return;
         }
         let shape = &scene.shapes[m];
-        let wo = -to_s / dist;
-        let bsdf = &scene.shapes[si].bsdf;
         let xs_s = self.attach.shape_vertex::<S>(si, x_s, n_s).x;
-        // Primal f G L_e (or f |cos| L_e at infinity), the measure change J and V_∂ in S.
-        let (fgl, jac, v) = match end {
+        // Per depth k the radiance arriving at x_S (times G or |cos| at infinity), the measure change J
+        // and V_∂ in S.
+        let mut radiance = Vec::new();
+        let (jac, v) = match end {
             End::Emitter(e, x_d, n_d) => {
                 let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d) else {
                     return;
                 };
                 let w = seg.omega();
-                let f = bsdf.eval::<f32>(n_s.into(), w.into(), wo.into());
                 let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
                 let le =
                     scene.emitters[e]
@@ -348,7 +403,43 @@ impl Context<'_> {
                         .emitted::<f32>(x_d.into(), n_d.into(), (-w).into());
                 let xd_s = self.attach.emitter_vertex::<S>(e, x_d, n_d).x;
                 let v = boundary_velocity(shape, &seg, xs_s, xd_s);
-                (f.primal() * le.primal() * g, seg.jacobian(), v)
+                radiance.push((le.primal(), g));
+                (seg.jacobian(), v)
+            }
+            End::Shape(d, x_d, n_d) => {
+                let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d) else {
+                    return;
+                };
+                let jac = seg.jacobian();
+                if jac == 0.0 {
+                    return;
+                }
+                let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
+                // The segment's own ray (the one whose first hit is x_D), continued from x_D.
+                let kmin = cams.iter().map(|c| c.depth).min().unwrap_or(1);
+                let o = scene.offset_origin(x_b, seg.n_b, seg.n_b);
+                let mut by_depth = Vec::new();
+                let (mut record, mut scratch) = (PathRecord::default(), PathRecord::default());
+                if !radiance_by_depth(
+                    scene,
+                    Ray::new(o, w),
+                    d,
+                    depth - kmin,
+                    &mut sampler,
+                    &mut record,
+                    &mut scratch,
+                    &mut by_depth,
+                    counters,
+                ) {
+                    return;
+                }
+                // radiance[k − 1] = (L^{(D−k)}, G) for the depths k the camera side reached.
+                for k in 1..=max_k {
+                    let l = by_depth.get((depth - k) as usize).copied();
+                    radiance.push((l.unwrap_or(glam::Vec3::ZERO), g));
+                }
+                let xd_s = self.attach.shape_vertex::<S>(d, x_d, n_d).x;
+                (jac, boundary_velocity(shape, &seg, xs_s, xd_s))
             }
             End::Environment(e) => {
                 // A stand-in x_D on the plane perpendicular to ω at a distance well beyond x_B.
@@ -358,49 +449,51 @@ impl Context<'_> {
                 let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, -w) else {
                     return;
                 };
-                let f = bsdf.eval::<f32>(n_s.into(), w.into(), wo.into());
                 let le =
                     scene.emitters[e]
                         .emitter
                         .emitted::<f32>(x_d.into(), (-w).into(), (-w).into());
                 let v = boundary_velocity(shape, &seg, xs_s, Vec3::constant(x_d)) / d;
-                (
-                    f.primal() * le.primal() * n_s.dot(w).abs(),
-                    seg.jacobian_directional(),
-                    v,
-                )
+                radiance.push((le.primal(), n_s.dot(w).abs()));
+                (seg.jacobian_directional(), v)
             }
         };
-        let j_film = frame.film_area_jacobian(Vec3::constant(x_s), Vec3::constant(n_s));
-        // Δf = −(f G L_e) on the clear side (the blocked side is 0).
-        let scale = -fgl * (jac * weight * j_film);
-        if scale == glam::Vec3::ZERO || !scale.is_finite() {
-            return;
-        }
-        let value = Vec3::<S>::constant(scale) * v;
-        if !(0..S::COUNT).all(|k| {
-            value.x.direction(k).is_finite()
-                && value.y.direction(k).is_finite()
-                && value.z.direction(k).is_finite()
-        }) {
-            return;
-        }
+        let filter = scene.camera.filter;
+        let radius = filter.radius();
         let (w, h) = (scene.camera.width as i64, scene.camera.height as i64);
         let reach = radius.ceil() as i64;
-        let (cx, cy) = (px.floor() as i64, py.floor() as i64);
-        for jy in (cy - reach).max(0)..=(cy + reach).min(h - 1) {
-            let dy = py - (jy as f32 + 0.5);
-            if dy.abs() >= radius {
+        for cam in &cams {
+            // Emitter and environment ends: the same radiance at every depth.
+            let (l, g) = radiance[((cam.depth - 1) as usize).min(radiance.len() - 1)];
+            // Δf = −(camera side · G · radiance) on the clear side (the blocked side is 0).
+            let scale = -(cam.f * l * g) * (jac * weight * cam.j_film);
+            if scale == glam::Vec3::ZERO || !scale.is_finite() {
                 continue;
             }
-            for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
-                let dx = px - (jx as f32 + 0.5);
-                if dx.abs() >= radius {
+            let value = Vec3::<S>::constant(scale) * v;
+            if !(0..S::COUNT).all(|k| {
+                value.x.direction(k).is_finite()
+                    && value.y.direction(k).is_finite()
+                    && value.z.direction(k).is_finite()
+            }) {
+                continue;
+            }
+            let (px, py) = (cam.film.x, cam.film.y);
+            let (cx, cy) = (px.floor() as i64, py.floor() as i64);
+            for jy in (cy - reach).max(0)..=(cy + reach).min(h - 1) {
+                let dy = py - (jy as f32 + 0.5);
+                if dy.abs() >= radius {
                     continue;
                 }
-                let fw = filter.eval::<f32>(dx, dy);
-                if fw != 0.0 {
-                    splats.push(((jy * w + jx) as usize, value * S::constant(fw)));
+                for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
+                    let dx = px - (jx as f32 + 0.5);
+                    if dx.abs() >= radius {
+                        continue;
+                    }
+                    let fw = filter.eval::<f32>(dx, dy);
+                    if fw != 0.0 {
+                        splats.push(((jy * w + jx) as usize, value * S::constant(fw)));
+                    }
                 }
             }
         }
