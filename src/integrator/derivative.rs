@@ -187,7 +187,7 @@ pub fn render_derivatives_in<S: Directions>(
 
 /// [`render_derivatives`] plus the boundary terms: the primary term with `primary_samples` curve samples
 /// and the secondary term with `secondary_samples` boundary samples for the whole image (0 skips a term).
-/// Errors as each term; the boundary terms exist for the `direct` integrator only.
+/// Errors as each term (both integrators have both terms).
 pub fn render_derivatives_with_boundary(
     scene: &Scene,
     count: usize,

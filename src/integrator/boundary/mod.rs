@@ -4,9 +4,10 @@
 //! [`segment`] holds the geometry of one boundary segment `(x_S, x_B, x_D)`: the measure changes
 //! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
 //! normal velocity `V_∂` of the discontinuity curve by AD. [`secondary`] estimates the secondary
-//! boundary term (shadows) of the `direct` integrator with them (its tangent angles steered towards the
-//! emitters by [`tangent_sampling`]), [`primary`] its primary boundary term (silhouettes seen from the
-//! camera).
+//! boundary term (shadows, on every segment of a path after the first) with them, its tangent angles
+//! steered towards the emitters by [`tangent_sampling`] and [`subpaths`] estimating the camera and
+//! light sides of segments deep in a path; [`primary`] the primary boundary term (silhouettes seen from
+//! the camera). Both integrators (`direct` is `path` with one scattering vertex).
 
 pub mod primary;
 pub mod secondary;

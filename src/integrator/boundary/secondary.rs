@@ -415,9 +415,13 @@ impl Context<'_> {
                     return;
                 }
                 let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
-                // The segment's own ray (the one whose first hit is x_D), continued from x_D.
+                // The segment's own line (x_S and x_D lie on it; x_B is pushed off M like the traced
+                // line), continued from its first hit x_D.
                 let kmin = cams.iter().map(|c| c.depth).min().unwrap_or(1);
                 let o = scene.offset_origin(x_b, seg.n_b, seg.n_b);
+                let Some(w) = (x_d - x_s).try_normalize() else {
+                    return;
+                };
                 let mut by_depth = Vec::new();
                 let (mut record, mut scratch) = (PathRecord::default(), PathRecord::default());
                 if !radiance_by_depth(
