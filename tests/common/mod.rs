@@ -96,3 +96,5 @@ impl Rng {
         lo + (hi - lo) * glam::Vec3::new(self.f32(), self.f32(), self.f32())
     }
 }
+
+pub mod deriv;

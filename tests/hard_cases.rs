@@ -1,0 +1,451 @@
+//! Hard cases of the complete derivative (interior + primary + secondary): each renders a tiny image,
+//! checks that no term holds a NaN or an infinity in any channel ([`common::deriv::assert_finite`]), and
+//! bounds the error against central finite differences with common random numbers
+//! ([`common::deriv::check_against_fd`]: blurred relative L2, region sums on the silhouette ring and the
+//! smooth pixels, primary term zero off the ring, interior alone outside the bound).
+//!
+//! Bounds come from two runs with independent seeds (`PSDR_TEST_SEED` unset and `=1`: estimator and FD
+//! reseeded), quoted next to each bound as `(seed 0, seed 1)`: each bound is twice the larger of the two,
+//! rounded up. "sums" is the largest of the whole-image, ring and smooth region-sum errors. The FD steps
+//! were checked with `PSDR_CHECK_H=1` (FD at `h/2` against `h`, same seed: at or below the FD's
+//! seed-to-seed difference, so truncation error is negligible next to its noise).
+
+mod common;
+
+use common::deriv::*;
+use implicit_psdr::scene::Scene;
+
+/// A `direct` scene of `size × size` pixels (tent filter) from JSON fragments: the camera's `origin`,
+/// `target` and `fov_y`, the shapes and the emitters.
+fn scene(size: u32, camera: &str, shapes: &str, emitters: &str) -> Scene {
+    scene_json(&format!(
+        r#"{{"camera": {{{camera}, "up": [0, 1, 0], "width": {size}, "height": {size}, "filter": "tent"}},
+            "integrator": {{"type": "direct"}}, "shapes": [{shapes}], "emitters": [{emitters}]}}"#
+    ))
+}
+
+const LIGHT: &str = r#"{"name": "light", "type": "rectangle", "center": [1.5, 4, 1], "normal": [0, -1, 0],
+    "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}"#;
+
+const SKY: &str = r#"{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}"#;
+
+fn budget() -> Budget {
+    Budget {
+        spp: 64,
+        primary: 50_000,
+        secondary: 200_000,
+        fd_spp: 512,
+    }
+}
+
+fn measure(label: &str, scene: &Scene, checks: &[Check], seed: u64) {
+    measure_with(label, scene, checks, budget(), seed);
+}
+
+fn measure_with(label: &str, scene: &Scene, checks: &[Check], budget: Budget, seed: u64) {
+    let m = check_against_fd(label, scene, checks, budget, seed);
+    assert_eq!(m.len(), checks.len());
+}
+
+fn check(name: &'static str, h: f32, l2: f64, sum: f64) -> Check {
+    Check { name, h, l2, sum }
+}
+
+fn diffuse(a: f32) -> String {
+    format!(r#""bsdf": {{"type": "diffuse", "albedo": [{a}, {a}, {a}]}}"#)
+}
+
+/// A finite floor slab (top at `y = 0`, slightly rounded so it has no crease). Not an infinite plane:
+/// under an environment, rays leaving the floor at shallow angles march along an unbounded plane for
+/// hundreds of steps (measured: a 32×32 image at 1024 spp, 12.4 s with a plane and a sky, 1.6 s with the
+/// plane alone, 0.6 s with this slab).
+fn slab() -> String {
+    format!(
+        r#"{{"name": "floor", "sdf": {{"type": "box", "center": [0, -0.1, 0], "half_size": [2.5, 0.1, 2.5],
+            "rounding": 0.02}}, {}}}"#,
+        diffuse(0.5)
+    )
+}
+
+/// A torus seen nearly edge-on (its axis tilted 8° from the image plane): the silhouette's ends are
+/// cusps where its tangent runs almost along the view ray (`|P'T| → 0`).
+#[test]
+fn grazing_silhouette() {
+    let s = scene(
+        24,
+        r#""origin": [0, 0.3, 3], "target": [0, 0, 0], "fov_y": 40"#,
+        &format!(
+            r#"{{"name": "donut", "sdf": {{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, -0.14],
+                "major_radius": 0.7, "minor_radius": 0.2}}, {}}}"#,
+            diffuse(0.7)
+        ),
+        &format!("{LIGHT}, {SKY}"),
+    );
+    measure(
+        "grazing_silhouette",
+        &s,
+        &[
+            // donut.minor_radius: L2 (0.185, 0.169), sums (0.020, 0.048);
+            // interior alone (2.65, 2.81). FD h/2 0.060, noise 0.089.
+            check("donut.minor_radius", 0.01, 0.38, 0.1),
+            // donut.center.y: L2 (0.184, 0.186), sums (0.032, 0.116);
+            // interior alone (2.35, 2.37). FD h/2 0.067, noise 0.077.
+            check("donut.center.y", 0.02, 0.38, 0.24),
+        ],
+        10,
+    );
+}
+
+/// A ball seen by a camera almost level with the floor: the floor and the ball's shadow on it are seen
+/// at a grazing angle (3–7°: the floor's film Jacobian is small, its pixels cover long strips).
+#[test]
+fn shadow_on_grazing_surface() {
+    let s = scene(
+        32,
+        r#""origin": [0, 0.35, 5], "target": [0, 0.2, 0], "fov_y": 35"#,
+        &format!(
+            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.4}}, {}}}"#,
+            slab(),
+            diffuse(0.7)
+        ),
+        LIGHT,
+    );
+    measure(
+        "shadow_on_grazing_surface",
+        &s,
+        &[
+            // ball.center.x: L2 (0.065, 0.066), sums (0.038, 0.031);
+            // interior alone (0.14, 0.16). FD h/2 0.038, noise 0.062.
+            check("ball.center.x", 0.02, 0.14, 0.08),
+            // light.center.x: L2 (0.026, 0.020), sums (0.024, 0.014);
+            // interior alone (0.09, 0.09). FD h/2 0.012, noise 0.018.
+            check("light.center.x", 0.05, 0.06, 0.05),
+        ],
+        11,
+    );
+}
+
+/// A large box with little rounding above the floor: its flat faces (κ = 0: every tangent line is
+/// rejected) are seen and cast the shadow; only the thin rounded edges are silhouettes.
+#[test]
+fn flat_faces() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3, 4], "target": [0, 0.3, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "slab", "sdf": {{"type": "box", "center": [0, 0.6, 0], "half_size": [0.8, 0.2, 0.6],
+                "rounding": 0.05}}, {}}}"#,
+            slab(),
+            diffuse(0.7)
+        ),
+        LIGHT,
+    );
+    measure(
+        "flat_faces",
+        &s,
+        &[
+            // slab.center.x: L2 (0.175, 0.183), sums (0.084, 0.065);
+            // interior alone (0.92, 0.86). FD h/2 0.024, noise 0.055.
+            check("slab.center.x", 0.02, 0.37, 0.17),
+            // slab.half_size.y: L2 (0.127, 0.117), sums (0.159, 0.097);
+            // interior alone (0.36, 0.35). FD h/2 0.035, noise 0.037.
+            check("slab.half_size.y", 0.01, 0.26, 0.32),
+        ],
+        12,
+    );
+}
+
+/// Concave tangent directions: a torus lying on its side above the floor, the light shining through its
+/// hole (its inner side is saddle-shaped), and a smooth union of two spheres (a saddle at the neck).
+#[test]
+fn concave_tangent_directions() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3.2, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "donut", "sdf": {{"type": "torus", "center": [-0.6, 0.5, 0], "axis": [0, 1, 0],
+                "major_radius": 0.5, "minor_radius": 0.15}}, {}}},
+               {{"name": "blob", "sdf": {{"type": "smooth_union", "k": 0.3, "children": [
+                   {{"type": "sphere", "center": [0.7, 0.4, 0], "radius": 0.3}},
+                   {{"type": "sphere", "center": [0.7, 0.95, 0], "radius": 0.25}}]}}, {}}}"#,
+            slab(),
+            diffuse(0.7),
+            diffuse(0.7)
+        ),
+        LIGHT,
+    );
+    measure(
+        "concave_tangent_directions",
+        &s,
+        &[
+            // donut.minor_radius: L2 (0.096, 0.071), sums (0.128, 0.010);
+            // interior alone (1.05, 1.01). FD h/2 0.042, noise 0.059.
+            check("donut.minor_radius", 0.01, 0.2, 0.26),
+            // blob.k: L2 (0.122, 0.137), sums (0.481, 0.359);
+            // interior alone (0.72, 1.02). FD h/2 0.127, noise 0.193.
+            check("blob.k", 0.02, 0.28, 0.97),
+        ],
+        13,
+    );
+}
+
+/// Two silhouettes on one camera ray: a far sphere partly behind a near one, its image circle centred on
+/// the near one's, so that the two circles cross; at each crossing one line of sight grazes both
+/// spheres (the background of the near silhouette jumps there from the far sphere to the sky).
+///
+/// Not tested: the two circles internally tangent (far centre offset by the difference of the angular
+/// radii). There the derivative is continuous but only `√ε`-regular in the offset `ε` (measured: the
+/// sum of d/d far.center.x is 16.6, 13.9 at −0.5, −0.1 px from tangency and −20.4, −63.9 at +0.1,
+/// +0.5 px, i.e. ≈ 13 − 106 √ε), so FD with any usable `h` (0.01 = 0.15 px) averages across the kink
+/// (it gives ≈ 0); the estimator there gave a sum of 25–27 against the limit ≈ 13 (report of issue 4).
+#[test]
+fn two_silhouettes_on_a_camera_ray() {
+    // The far centre's direction is offset by the near sphere's angular radius.
+    let offset = (0.2f32 / 3.0).asin();
+    let (x, z) = (6.0 * offset.sin(), 3.0 - 6.0 * offset.cos());
+    let s = scene(
+        32,
+        r#""origin": [0, 0, 3], "target": [0, 0, 0], "fov_y": 20"#,
+        &format!(
+            r#"{{"name": "near", "sdf": {{"type": "sphere", "center": [0, 0, 0], "radius": 0.2}}, {}}},
+               {{"name": "far", "sdf": {{"type": "sphere", "center": [{x}, 0, {z}], "radius": 0.5}}, {}}}"#,
+            diffuse(0.8),
+            diffuse(0.3)
+        ),
+        &format!("{LIGHT}, {SKY}"),
+    );
+    measure(
+        "two_silhouettes_on_a_camera_ray",
+        &s,
+        &[
+            // near.radius: L2 (0.087, 0.086), sums (0.182, 0.142);
+            // interior alone (1.23, 1.23). FD h/2 0.053, noise 0.050.
+            check("near.radius", 0.005, 0.18, 0.37),
+            // far.center.x: L2 (0.075, 0.095), sums (0.029, 0.046);
+            // interior alone (1.69, 1.74). FD h/2 0.039, noise 0.054.
+            check("far.center.x", 0.01, 0.19, 0.1),
+        ],
+        14,
+    );
+}
+
+/// Two spheres whose shadow boundaries coincide: on one vertical line under a small light, radii
+/// proportional to the distance from it, so one tangent line from the floor touches both.
+#[test]
+fn two_silhouettes_on_a_light_ray() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3, 3], "target": [0, 0.5, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "upper", "sdf": {{"type": "sphere", "center": [0, 2.5, 0], "radius": 0.15}}, {}}},
+               {{"name": "lower", "sdf": {{"type": "sphere", "center": [0, 1.5, 0], "radius": 0.25}}, {}}}"#,
+            slab(),
+            diffuse(0.7),
+            diffuse(0.7)
+        ),
+        r#"{"name": "light", "type": "rectangle", "center": [0, 4, 0], "normal": [0, -1, 0],
+            "u": [1, 0, 0], "size": [0.2, 0.2], "radiance": [300, 300, 300]}"#,
+    );
+    measure(
+        "two_silhouettes_on_a_light_ray",
+        &s,
+        &[
+            // upper.radius: L2 (0.363, 0.188), sums (0.280, 0.097);
+            // interior alone (1.00, 1.00). FD h/2 0.069, noise 0.057.
+            check("upper.radius", 0.005, 0.73, 0.56),
+            // lower.center.x: L2 (0.281, 0.228), sums (0.164, 0.102);
+            // interior alone (0.80, 0.76). FD h/2 0.042, noise 0.131.
+            check("lower.center.x", 0.01, 0.57, 0.33),
+        ],
+        15,
+    );
+}
+
+/// A thin rod (a capsule 0.03 thick, about one pixel wide) above the floor, and its thin shadow.
+#[test]
+fn thin_feature() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "rod", "sdf": {{"type": "capsule", "a": [-0.9, 0.6, 0.3], "b": [0.9, 0.7, -0.3],
+                "radius": 0.015}}, {}}}"#,
+            slab(),
+            diffuse(0.9)
+        ),
+        &format!("{LIGHT}, {SKY}"),
+    );
+    measure(
+        "thin_feature",
+        &s,
+        // rod.radius: L2 (0.444, 0.248), sums (0.026, 0.118);
+        // interior alone (1.66, 1.78). FD h/2 0.166, noise 0.187.
+        &[check("rod.radius", 0.003, 0.89, 0.24)],
+        16,
+    );
+}
+
+/// A ball under two pixels across (radius 0.9 px) above the floor, and its shadow.
+#[test]
+fn tiny_object() {
+    let s = scene(
+        24,
+        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "dot", "sdf": {{"type": "sphere", "center": [0.2, 0.5, 0], "radius": 0.1}}, {}}}"#,
+            slab(),
+            diffuse(0.9)
+        ),
+        &format!("{LIGHT}, {SKY}"),
+    );
+    // Few camera samples hit the dot: its interior term needs more of them.
+    let budget = Budget {
+        spp: 256,
+        fd_spp: 1024,
+        ..budget()
+    };
+    measure_with(
+        "tiny_object",
+        &s,
+        // dot.radius: L2 (0.174, 0.124), sums (0.281, 0.079);
+        // interior alone (2.13, 2.27). FD h/2 0.196, noise 0.103.
+        &[check("dot.radius", 0.005, 0.35, 0.57)],
+        budget,
+        17,
+    );
+}
+
+/// A ball cut by the image's left border, its shadow too.
+#[test]
+fn partly_outside_the_image() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [-1.4, 0.6, 0], "radius": 0.5}}, {}}}"#,
+            slab(),
+            diffuse(0.7)
+        ),
+        r#"{"name": "light", "type": "rectangle", "center": [0, 4, 1], "normal": [0, -1, 0],
+            "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}"#,
+    );
+    measure(
+        "partly_outside_the_image",
+        &s,
+        &[
+            // ball.center.x: L2 (0.068, 0.050), sums (0.046, 0.071);
+            // interior alone (0.78, 0.77). FD h/2 0.024, noise 0.055.
+            check("ball.center.x", 0.02, 0.14, 0.15),
+            // ball.radius: L2 (0.057, 0.054), sums (0.087, 0.080);
+            // interior alone (0.58, 0.56). FD h/2 0.028, noise 0.023.
+            check("ball.radius", 0.02, 0.12, 0.18),
+        ],
+        18,
+    );
+}
+
+/// The camera 0.1 from a ball's surface, looking past it at the floor: the silhouette is close and
+/// large, seen through a wide perspective.
+#[test]
+fn camera_close_to_a_surface() {
+    let s = scene(
+        24,
+        r#""origin": [0.6, 1.1, 1.5], "target": [0, 0, 0], "fov_y": 60"#,
+        &format!(
+            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0.6, 1.1, 0.7], "radius": 0.7}}, {}}}"#,
+            slab(),
+            diffuse(0.7)
+        ),
+        &format!("{LIGHT}, {SKY}"),
+    );
+    // The interior term of the close, large silhouette is noisy.
+    let budget = Budget {
+        spp: 128,
+        ..budget()
+    };
+    measure_with(
+        "camera_close_to_a_surface",
+        &s,
+        &[
+            // ball.center.x: L2 (0.497, 0.575), sums (0.257, 0.334);
+            // interior alone (3.41, 3.65). FD h/2 0.135, noise 0.174.
+            check("ball.center.x", 0.01, 1.15, 0.67),
+            // ball.radius: L2 (0.571, 0.590), sums (0.173, 0.169);
+            // interior alone (2.10, 2.10). FD h/2 0.072, noise 0.076.
+            check("ball.radius", 0.01, 1.18, 0.35),
+        ],
+        budget,
+        19,
+    );
+}
+
+/// A sphere light touching the ball that shadows the floor: the shadow segments `x_B x_D` become
+/// arbitrarily short near the contact. The parameter slides the ball along the contact's tangent plane
+/// (moving it towards the light would make them intersect: a kink FD averages over).
+#[test]
+fn light_touching_an_occluder() {
+    let s = scene(
+        32,
+        r#""origin": [0, 3, 3.5], "target": [0, 0.5, 0], "fov_y": 45"#,
+        &format!(
+            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.8, 0], "radius": 0.5}}, {}}}"#,
+            slab(),
+            diffuse(0.7)
+        ),
+        r#"{"name": "light", "type": "sphere", "center": [0.7, 0.8, 0], "radius": 0.2, "radiance": [20, 20, 20]}"#,
+    );
+    // Near the contact `G ∝ 1/d²` is singular: the interior term's samples there are heavy-tailed
+    // (ball.center.z, 64 spp: blurred rel L2 0.12 and 0.38 with two seeds, the interior's sum −110 and
+    // −175). More camera samples, and the parameter whose interior term matters less.
+    let budget = Budget {
+        spp: 256,
+        ..budget()
+    };
+    measure_with(
+        "light_touching_an_occluder",
+        &s,
+        // ball.center.y: L2 (0.116, 0.149), sums (0.017, 0.032);
+        // interior alone (0.65, 0.57). FD h/2 0.076, noise 0.185.
+        &[check("ball.center.y", 0.01, 0.3, 0.07)],
+        budget,
+        20,
+    );
+}
+
+/// The primary term's image sum for a diffuse ball in a constant environment `L = 1` has a closed form,
+/// whatever the samples: `Σ_pixels Σ_channels = −3 L dR/dr 2πR` (`R = f tan α`, `sin α = r/D` the
+/// projected radius, `dR/dr = f / (D cos³α)`; the tent's translates sum to 1 inside the image). For a
+/// circle the estimate of the sum does not depend on the seed (measured: identical with seeds 1, 2, 3),
+/// so the tolerance is tight: 0.3%. Measured: R = 11.4 px −2590.43 vs −2590.28 (0.006%), R = 0.5 px
+/// −103.615 vs −103.613 (0.002%), R = 0.33 px −67.93 vs −68.31 (0.56%), R = 0.22 px −44.83 vs −45.53
+/// (1.55%): the sum falls short for sub-pixel silhouettes, as if the sampled curve were a polygon of
+/// about ten chords (`1 − sin(π/N)/(π/N) ≈ 1.6%` for `N = 10`). Suspect: `silhouette_curve`'s density
+/// is exact only when its boxes are small against the curve's radius of curvature (its module docs),
+/// which a silhouette of radius 0.02 (world) may not reach.
+#[test]
+#[ignore = "bug: primary term sum 1.6% short of the closed form for a silhouette 0.22 px in radius (issue 4)"]
+fn tiny_silhouette_primary_sum_matches_closed_form() {
+    for r in [0.0455f32, 0.02] {
+        let s = scene_json(&format!(
+            r#"{{"camera": {{"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
+                  "width": 32, "height": 32, "filter": "tent"}},
+                "integrator": {{"type": "direct"}},
+                "shapes": [{{"name": "ball", "sdf": {{"type": "sphere", "center": [0.013, 0.021, 0],
+                    "radius": {r}}}, {}}}],
+                "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#,
+            diffuse(0.5)
+        ));
+        let t = &derivative_terms(&s, &["ball.radius"], 1, 100_000, 0, seed(21))[0];
+        let f = 16.0f64 / 20.0f64.to_radians().tan();
+        let sin_a = r as f64 / 4.0;
+        let cos_a = (1.0 - sin_a * sin_a).sqrt();
+        let big_r = f * sin_a / cos_a;
+        let expected = -3.0 * f / (4.0 * cos_a.powi(3)) * 2.0 * std::f64::consts::PI * big_r;
+        let sum: f64 = t.primary.iter().sum();
+        println!("R = {big_r:.3} px: primary sum {sum:.4}, closed form {expected:.4}");
+        assert!(
+            (sum - expected).abs() <= 3e-3 * expected.abs(),
+            "R = {big_r} px: primary sum {sum} vs {expected}"
+        );
+    }
+}
