@@ -5,8 +5,9 @@
 //! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
 //! normal velocity `V_∂` of the discontinuity curve by AD. [`secondary`] estimates the secondary
 //! boundary term (shadows) of the `direct` integrator with them, [`primary`] its primary boundary term
-//! (silhouettes seen from the camera).
+//! (silhouettes seen from the camera), with [`emitter_edges`] for the outlines of emitters seen directly.
 
+pub mod emitter_edges;
 pub mod primary;
 pub mod secondary;
 pub mod segment;

@@ -89,9 +89,12 @@
 //! the ray enters the solid on both sides) contribute 0.
 //!
 //! **Scope.** `direct` only (the side radiances use its estimator; other integrators are refused with
-//! [`crate::Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own). Not
-//! included: edges of finite emitters seen directly, crease edges, the film edges.
+//! [`crate::Error::Unsupported`]); shapes with finite bounds (planes have no silhouettes of their own),
+//! and the outlines of finite emitters seen directly ([`super::emitter_edges`]: rectangle edges, sphere
+//! silhouettes; they take half of the samples when both kinds are in view). Not included: crease edges
+//! (listed by [`crate::scene::Scene::creased_shapes`]), the film edges.
 
+use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
 use super::{check_supported, in_windows};
 use crate::error::Result;
@@ -183,9 +186,17 @@ pub fn render_primary_in<S: Directions>(
 ) -> Result<PrimaryTerm> {
     check_supported(scene, "primary")?;
     let curves = silhouettes(scene)?;
+    // Edges of emitters seen directly ([`emitter_edges`]) share the samples.
+    let outlines = EmitterOutlines::seen_from(scene);
+    let (n_curves, n_outlines) =
+        emitter_edges::split_samples(samples, !curves.is_empty(), !outlines.is_empty());
+    let seed = options.render.seed;
     let mut coverage = Vec::with_capacity(count);
     let radiance = in_windows::<S>(scene, count, |windowed, width| {
-        let (r, c) = pass::<S>(windowed, &curves, width, options.render.seed, samples);
+        let (mut r, mut c) = pass::<S>(windowed, &curves, width, seed, n_curves);
+        emitter_edges::add_outline_pass::<S>(
+            windowed, &outlines, width, seed, n_outlines, &mut r, &mut c,
+        );
         coverage.extend(c);
         r
     });
