@@ -24,8 +24,14 @@ const MEET_DEPTH: u32 = 6;
 
 impl Sdf {
     /// Why the surface `φ = 0` of this node may have crease edges (normal discontinuities), e.g. `"sharp
-    /// box (rounding 0)"`, or `None` if it has none. Several reasons are joined by `"; "`. See the
-    /// [module docs](self) for what is exact and what is conservative.
+    /// box (rounding 0)"`, or `None` if it has none. Several reasons are joined by `"; "`.
+    ///
+    /// Exact for primitives (a box or cylinder with `rounding = 0`); conservative for hard CSG (union,
+    /// intersection, difference, and the smooth union with `k ≤ 0`): a crease is reported when two
+    /// children's surfaces may cross, which [`surfaces_may_meet`] disproves with interval enclosures
+    /// (touching surfaces count as crossing; a child's crease hidden by another child is still
+    /// reported). Transforms, names (prefixed `"name: "`) and smooth unions keep their children's
+    /// creases.
     pub fn creases(&self) -> Option<String> {
         let mut reasons = Vec::new();
         self.collect_creases(&mut reasons);

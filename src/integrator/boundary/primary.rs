@@ -167,8 +167,9 @@ impl PrimaryTerm {
     }
 }
 
-/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` silhouette samples for the whole
-/// image. Errors as [`render_primary`].
+/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` boundary samples for the whole
+/// image, shared by shape silhouettes and emitter outlines ([`emitter_edges::split_samples`]). Errors as
+/// [`render_primary`].
 pub fn render_primary_terms(
     scene: &Scene,
     count: usize,
