@@ -227,6 +227,16 @@ impl Scene {
         }
     }
 
+    /// The shapes whose surface may have crease edges, as `(shape name, reason)` ([`Sdf::creases`]): the
+    /// boundary terms do not sample crease curves, so derivatives that move them (any geometric
+    /// parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    pub fn creased_shapes(&self) -> Vec<(String, String)> {
+        self.shapes
+            .iter()
+            .filter_map(|s| s.sdf.creases().map(|r| (s.name.clone(), r)))
+            .collect()
+    }
+
     /// The first surface hit by `ray` in `(0, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Intersection {
         let mut nearest = Nearest {
@@ -341,6 +351,24 @@ mod tests {
             Filter::Tent,
         );
         Scene::new(camera, IntegratorKind::Direct, 1, vec![shape], vec![])
+    }
+
+    #[test]
+    fn creased_shapes_are_listed_with_their_reason() {
+        let bsdf = Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        };
+        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf));
+        assert!(scene.creased_shapes().is_empty());
+        scene.shapes.push(Shape::new(
+            "crate",
+            Sdf::cuboid([2.0, 0.0, 0.0], [0.5; 3], 0.0),
+            bsdf,
+        ));
+        assert_eq!(
+            scene.creased_shapes(),
+            vec![("crate".to_string(), "sharp box (rounding 0)".to_string())]
+        );
     }
 
     #[test]

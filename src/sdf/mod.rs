@@ -25,6 +25,7 @@
 //! per-axis differences, `sqrt(Σ L_a² + max(0, 1 − min L_a²))`, about `√3` for a sampled distance field.
 
 mod bake;
+mod creases;
 mod csg;
 mod grid;
 pub mod interval;
@@ -33,6 +34,7 @@ mod primitives;
 mod transform;
 
 pub use bake::{bake, bake_dims};
+pub use creases::surfaces_may_meet;
 pub use npy::{read_npy, write_npy};
 
 use crate::error::Result;

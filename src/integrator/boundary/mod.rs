@@ -7,8 +7,10 @@
 //! boundary term (shadows, on every segment of a path after the first) with them, its tangent angles
 //! steered towards the emitters by [`tangent_sampling`] and [`subpaths`] estimating the camera and
 //! light sides of segments deep in a path; [`primary`] the primary boundary term (silhouettes seen from
-//! the camera). Both integrators (`direct` is `path` with one scattering vertex).
+//! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Both integrators
+//! (`direct` is `path` with one scattering vertex).
 
+pub mod emitter_edges;
 pub mod primary;
 pub mod secondary;
 pub mod segment;

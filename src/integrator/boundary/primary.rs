@@ -25,8 +25,9 @@
 //!
 //! `v` the normal velocity (pixels per unit parameter) of `Γ` along the image normal `n_img` pointing to
 //! the background side, **relative to the background's own parametrisation**: relative to the moving
-//! projection of the attached `x_D` on a finite surface, relative to the fixed film point for a
-//! background at infinity (the interior keeps the film point of an escaping camera ray fixed). For the
+//! projection of the attached `x_D` on a finite surface, relative to the moving projection of the fixed
+//! direction for a background at infinity (the interior projects an escaping camera ray's direction with
+//! the lifted camera frame, so a camera rotation moves the environment on the film). For the
 //! sphere of radius `r` in a constant environment `L` the sum of both terms is the closed form
 //! `−(1−ρ)L dR/dr ∮ w_j dℓ` (`R` the projected radius).
 //!
@@ -69,15 +70,15 @@
 //!
 //! Let the parameters move with the background point held: the ray from the lifted eye `c(π)` is
 //! `x(π) = c(π) + |c x_B| d̂(π)` at the depth of `x_B`, with `d̂` the unit direction towards the attached
-//! `x_D(π)` ([`SceneAttach`]), or for a background at infinity the direction through the fixed film
-//! point `u`, `r (u_x − c_x) − up (u_y − c_y) + f̂ f` normalised, in the lifted camera frame. The tangency
+//! `x_D(π)` ([`SceneAttach`]), or for a background at infinity the fixed direction `d̂` through the film
+//! point `u`, `r (u_x − c_x) − up (u_y − c_y) + f̂ f` normalised, in the primal camera frame. The tangency
 //! residual `h(π) = φ_π(x(π))` (shape parameters lifted too) is 0 at the primal. Moving `u` by `δ n_img`
 //! (or the film point of `x_D` by `δ n_img`: the same change of direction) changes it by
 //! `∇φ(x_B)·∂x/∂u n_img δ = |c x_B| ∇φ·(I − d̂d̂ᵀ) m / |d| δ`, `m = r n_x − up n_y`
 //! (the ray is tangent at `x_B`, so to first order the minimum of `φ` along the ray stays at `x_B`'s
 //! depth). Hence `v = −∂πh / rate`, `rate = |c x_B| ∇φ·(I − d̂d̂ᵀ) m / |d|`, and `n_img` is oriented so
 //! that `rate > 0` (towards growing `φ`: the background side). This is [`super::boundary_velocity`]'s
-//! construction with `x_S = c` moving with the camera and the far end replaced by the film point.
+//! construction with `x_S = c` moving with the camera and the far end replaced by the background point (or direction).
 //!
 //! # The background radiance
 //!
@@ -94,9 +95,13 @@
 //! occluder side is the interior's moving filter whatever the rest of the path. Visibility jumps of the
 //! later segments are the secondary term's.
 //!
-//! **Scope.** Shapes with finite bounds (planes have no silhouettes of their own). Not included: edges of
-//! finite emitters seen directly, crease edges, the film edges.
+//! **Scope.** Both integrators; shapes with finite bounds and curved surfaces (planes and sharp boxes
+//! have no smooth silhouettes), and the outlines of finite emitters seen directly
+//! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes; they take half of the samples when
+//! both kinds are in view). Not included: crease edges (listed by
+//! [`crate::scene::Scene::creased_shapes`]), the film edges.
 
+use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
 use super::{check_supported, in_windows};
 use crate::error::Result;
@@ -168,8 +173,9 @@ impl PrimaryTerm {
     }
 }
 
-/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` silhouette samples for the whole
-/// image. Errors as [`render_primary`].
+/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` boundary samples for the whole
+/// image, shared by shape silhouettes and emitter outlines ([`emitter_edges::split_samples`]). Errors as
+/// [`render_primary`].
 pub fn render_primary_terms(
     scene: &Scene,
     count: usize,
@@ -188,9 +194,17 @@ pub fn render_primary_in<S: Directions>(
 ) -> Result<PrimaryTerm> {
     check_supported(scene, "primary")?;
     let curves = silhouettes(scene)?;
+    // Edges of emitters seen directly ([`emitter_edges`]) share the samples.
+    let outlines = EmitterOutlines::seen_from(scene);
+    let (n_curves, n_outlines) =
+        emitter_edges::split_samples(samples, !curves.is_empty(), !outlines.is_empty());
+    let seed = options.render.seed;
     let mut coverage = Vec::with_capacity(count);
     let radiance = in_windows::<S>(scene, count, |windowed, width| {
-        let (r, c) = pass::<S>(windowed, &curves, width, options.render.seed, samples);
+        let (mut r, mut c) = pass::<S>(windowed, &curves, width, seed, n_curves);
+        emitter_edges::add_outline_pass::<S>(
+            windowed, &outlines, width, seed, n_outlines, &mut r, &mut c,
+        );
         coverage.extend(c);
         r
     });
@@ -375,7 +389,7 @@ fn sample<S: Directions>(
     );
     let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
     // v = −∂πh / rate, relative to the background's own parametrisation (module docs): the ray from the
-    // moving eye towards the attached x_D, or through the fixed film point for a background at infinity.
+    // moving eye towards the attached x_D, or along the fixed direction for a background at infinity.
     let fs = scene.camera.frame::<S>();
     let x_d = record.vertices.first().and_then(|v| match v.kind {
         VertexKind::Shape(i) => Some(attach.shape_vertex::<S>(i, v.p, v.n).x),
@@ -384,7 +398,7 @@ fn sample<S: Directions>(
     });
     let d_s = match x_d {
         Some(x_d) => x_d - fs.origin,
-        None => fs.right * S::constant(ox) - fs.up * S::constant(oy) + fs.forward * fs.focal,
+        None => Vec3::constant(d_hat),
     }
     .normalize_or_zero();
     let h = shape.eval(fs.origin + d_s * S::constant(dist));

@@ -1,0 +1,558 @@
+//! The primary boundary term along the edges of finite emitters seen directly (the rest of the primary
+//! term, silhouettes of shapes, is [`super::primary`]; read its module docs first).
+//!
+//! # The jump
+//!
+//! A finite emitter seen by the camera is an occluder like any shape: across the image of its outline
+//! the radiance jumps from the emitter's own side (its radiance, or 0 for a one-sided rectangle seen from
+//! behind: [`crate::emitter::Emitter::intersect`] blocks rays on both sides, [`Emitter::emitted`] is 0
+//! on the back) to the background. The outline is
+//! - a **rectangle**'s four edges (the image of a planar convex polygon is the convex polygon of the
+//!   images of its corners, so every edge is on the boundary unless the rectangle is seen edge-on);
+//! - a **sphere**'s silhouette circle from the eye `c`: centre `o − (r²/d) ŵ`, radius `r √(1 − r²/d²)`
+//!   (`o` the sphere's centre, `d = |o − c|`, `ŵ = (o − c)/d`).
+//!
+//! The emitter's own side is the interior term's, as for a shape silhouette: the interior attaches the
+//! first vertex on the emitter rigidly ([`crate::integrator::attach`]: a rectangle point keeps its
+//! relative coordinates, a sphere point its direction from the centre), so the emitter's region of the
+//! film moves with its attached points through the moving pixel filter. On the sphere the visible cap's
+//! sliding over the surface costs nothing (its edge has `J_film ∝ |n·q| = 0`). What is left is the
+//! background's side, in the background's own parametrisation: eq. (1) of [`super::primary`] with
+//!
+//! ```text
+//!   Δ = 0 − L_bg(x_D)   (radiance),      Δ = −1   (W, the coverage part, eq. (3) there).
+//! ```
+//!
+//! # The velocity, by AD
+//!
+//! Let `x(π)` be the attached outline point (a rectangle edge point stays on its edge; a sphere point
+//! at the silhouette moves to a point of the moved sphere within `O(π²)` of the moved silhouette, and
+//! the projection folds there, so its image is within `O(π²)` of the moved outline's image). The normal
+//! velocity of the outline's image relative to the background is
+//!
+//! ```text
+//!   v = (∂π P_π(x(π)) − ∂π u_D(π)) · n_img                                                          (1)
+//! ```
+//!
+//! `P_π` the projection with the lifted camera frame, `n_img` the image normal oriented towards the
+//! background, `u_D` the background's film point as the interior moves it: the projection of the
+//! attached `x_D` for a finite background, the projection of the fixed direction of the ray for a
+//! background at infinity (the interior projects an escaping camera ray's direction with the lifted
+//! frame, [`crate::integrator::derivative`]). `v > 0` grows the emitter's side, the convention of
+//! [`super::boundary_velocity`].
+//!
+//! `n_img`: with `T` the unit tangent of the outline and `m` its outward direction (in the rectangle's
+//! plane, perpendicular to the edge; the sphere's normal at the silhouette point), the image tangent is
+//! `P'T` and `n_img ⊥ P'T` points to the side of `P'm`, the image of a step off the emitter. Edge-on
+//! edges (`P'm·n_img ≈ 0`) have an image of zero area on one side and are skipped.
+//!
+//! # Sampling
+//!
+//! Outline points are uniform on the total length `Λ` of the outlines in view (density `1/Λ` per unit
+//! length): rectangle edges clipped to the view frustum grown by the filter radius (one pixel more), and
+//! sphere circles whole unless the sphere is outside the frustum. A sample at `x_B` contributes to every
+//! pixel whose filter covers `u_B = P(x_B)`
+//!
+//! ```text
+//!   w_j(u_B) · Δ · v · |P'T| · Λ                                                                     (2)
+//! ```
+//!
+//! averaged over the `N` samples of its own random stream ([`EDGE_STREAM`]). `x_B` must be visible
+//! from the eye and the background is found as for silhouettes: one camera path (the `direct`
+//! estimator, [`trace_path`]) through the film point `u_B + ε n_img`, `ε` = 1/50 pixel, must not hit
+//! anything before `x_B`'s depth (less a margin); its first vertex is `x_D`, its detached contribution
+//! `L_bg`.
+//!
+//! [`super::primary::render_primary_terms`] gives the primary term's samples to the silhouettes and to
+//! the outlines half and half when both exist ([`split_samples`]), all to one when the other is absent.
+
+use crate::emitter::Emitter;
+use crate::film::Image;
+use crate::integrator::attach::SceneAttach;
+use crate::integrator::derivative::Directions;
+use crate::integrator::path::{
+    PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
+};
+use crate::math::Vec3;
+use crate::sampler::Sampler;
+use crate::scalar::Scalar;
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// The random stream of emitter-outline samples (distinct from the silhouettes' and the camera's).
+pub const EDGE_STREAM: u64 = 0xED6E_0F11;
+
+/// Samples per parallel work item (gathered in sample order: deterministic).
+const CHUNK: u64 = 256;
+
+/// The film offset of the background ray from the outline, in pixels.
+const OFFSET_PIXELS: f32 = 0.02;
+
+/// One piece of an emitter's outline seen from the eye.
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Piece {
+    /// A straight part of a rectangle's edge from `a` to `b`, `outward` (unit) pointing off the emitter
+    /// in its plane.
+    Segment {
+        emitter: usize,
+        a: glam::Vec3,
+        b: glam::Vec3,
+        outward: glam::Vec3,
+    },
+    /// A sphere's silhouette circle: `centre + radius (cos θ e1 + sin θ e2)`.
+    Circle {
+        emitter: usize,
+        centre: glam::Vec3,
+        radius: f32,
+        e1: glam::Vec3,
+        e2: glam::Vec3,
+        sphere_centre: glam::Vec3,
+    },
+}
+
+impl Piece {
+    fn length(&self) -> f32 {
+        match self {
+            Piece::Segment { a, b, .. } => (*b - *a).length(),
+            Piece::Circle { radius, .. } => std::f32::consts::TAU * radius,
+        }
+    }
+}
+
+/// A point of an outline: position, unit tangent, unit outward direction, emitter index.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct OutlinePoint {
+    /// The point.
+    pub x: glam::Vec3,
+    /// Unit tangent of the outline.
+    pub tangent: glam::Vec3,
+    /// Unit direction off the emitter (in a rectangle's plane; a sphere's normal).
+    pub outward: glam::Vec3,
+    /// Index of the emitter in [`Scene::emitters`].
+    pub emitter: usize,
+}
+
+/// The outlines of the finite emitters in view from the camera centre, for uniform sampling by length.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EmitterOutlines {
+    pieces: Vec<Piece>,
+    /// Cumulative lengths (`cumulative[i]` = total length of pieces `0..=i`).
+    cumulative: Vec<f32>,
+}
+
+impl EmitterOutlines {
+    /// The outlines of `scene`'s finite emitters seen from its camera centre (see the
+    /// [module docs](self)); empty when no finite emitter is in view.
+    pub fn seen_from(scene: &Scene) -> Self {
+        let frustum = Frustum::of(scene);
+        let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
+        let mut pieces = Vec::new();
+        for &e in &scene.finite_emitters {
+            match &scene.emitters[e].emitter {
+                Emitter::Rectangle {
+                    center,
+                    normal,
+                    u,
+                    size,
+                    ..
+                } => {
+                    let v = normal.cross(*u);
+                    let (ha, hb) = (0.5 * size[0].value, 0.5 * size[1].value);
+                    if !(ha > 0.0 && hb > 0.0) {
+                        continue;
+                    }
+                    let c = center.value();
+                    // Seen edge-on (the eye in its plane) the rectangle covers no area.
+                    if (eye - c).dot(*normal) == 0.0 {
+                        continue;
+                    }
+                    let corner = |s: f32, t: f32| c + *u * (s * ha) + v * (t * hb);
+                    for (a, b, outward) in [
+                        (corner(-1.0, -1.0), corner(1.0, -1.0), -v),
+                        (corner(1.0, -1.0), corner(1.0, 1.0), *u),
+                        (corner(1.0, 1.0), corner(-1.0, 1.0), v),
+                        (corner(-1.0, 1.0), corner(-1.0, -1.0), -*u),
+                    ] {
+                        if let Some((a, b)) = frustum.clip(a, b)
+                            && (b - a).length() > 0.0
+                        {
+                            pieces.push(Piece::Segment {
+                                emitter: e,
+                                a,
+                                b,
+                                outward,
+                            });
+                        }
+                    }
+                }
+                Emitter::Sphere { center, radius, .. } => {
+                    let (o, r) = (center.value(), radius.value);
+                    let to = o - eye;
+                    let d = to.length();
+                    // From inside (or on) the sphere there is no outline.
+                    if !(r > 0.0 && d > r && d.is_finite()) || frustum.misses_ball(o, r) {
+                        continue;
+                    }
+                    let w = to / d;
+                    let k = r / d;
+                    let frame = crate::math::Frame::from_normal(w);
+                    pieces.push(Piece::Circle {
+                        emitter: e,
+                        centre: o - w * (r * k),
+                        radius: r * (1.0 - k * k).max(0.0).sqrt(),
+                        e1: frame.to_world(glam::Vec3::X),
+                        e2: frame.to_world(glam::Vec3::Y),
+                        sphere_centre: o,
+                    });
+                }
+                Emitter::Constant { .. } => {}
+            }
+        }
+        pieces.retain(|p| p.length() > 0.0 && p.length().is_finite());
+        let mut total = 0.0;
+        let cumulative = pieces
+            .iter()
+            .map(|p| {
+                total += p.length();
+                total
+            })
+            .collect();
+        Self { pieces, cumulative }
+    }
+
+    /// True when no outline is in view.
+    pub fn is_empty(&self) -> bool {
+        self.pieces.is_empty()
+    }
+
+    /// Total length `Λ` of the outlines (scene units); the sampling density is `1/Λ` per unit length.
+    pub fn total_length(&self) -> f32 {
+        self.cumulative.last().copied().unwrap_or(0.0)
+    }
+
+    /// A point uniform on the total length from two uniform numbers in `[0, 1)`; `None` when empty.
+    pub fn sample(&self, u: [f32; 2]) -> Option<OutlinePoint> {
+        // Pieces have finite positive lengths, so a non-empty total is positive.
+        if self.pieces.is_empty() {
+            return None;
+        }
+        let total = self.total_length();
+        let target = u[0] * total;
+        let i = self
+            .cumulative
+            .partition_point(|&c| c <= target)
+            .min(self.pieces.len() - 1);
+        Some(match self.pieces[i] {
+            Piece::Segment {
+                emitter,
+                a,
+                b,
+                outward,
+            } => {
+                let ab = b - a;
+                OutlinePoint {
+                    x: a + ab * u[1],
+                    tangent: ab.normalize(),
+                    outward,
+                    emitter,
+                }
+            }
+            Piece::Circle {
+                emitter,
+                centre,
+                radius,
+                e1,
+                e2,
+                sphere_centre,
+            } => {
+                let (s, c) = (std::f32::consts::TAU * u[1]).sin_cos();
+                let x = centre + (e1 * c + e2 * s) * radius;
+                OutlinePoint {
+                    x,
+                    tangent: e2 * c - e1 * s,
+                    outward: (x - sphere_centre).normalize_or_zero(),
+                    emitter,
+                }
+            }
+        })
+    }
+}
+
+/// The view frustum grown by the filter radius plus one pixel: half-spaces `n·(x − eye) ≥ offset`.
+struct Frustum {
+    eye: glam::Vec3,
+    planes: [(glam::Vec3, f32); 5],
+}
+
+impl Frustum {
+    fn of(scene: &Scene) -> Self {
+        let frame = scene.camera.frame::<f32>();
+        let (r, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
+            (frame.right.into(), frame.up.into(), frame.forward.into());
+        let f = frame.focal;
+        let (cx, cy) = frame.center;
+        let grow = scene.camera.filter.radius() + 1.0;
+        let (w, h) = (scene.camera.width as f32, scene.camera.height as f32);
+        // x = cx + f (q·r)/z ≥ −grow  ⇔  f q·r + (cx + grow) z ≥ 0, and likewise for the other sides.
+        let planes = [
+            (r * f + fwd * (cx + grow), 0.0),
+            (fwd * (w + grow - cx) - r * f, 0.0),
+            (fwd * (cy + grow) - up * f, 0.0),
+            (up * f + fwd * (h + grow - cy), 0.0),
+            // In front of the eye (the projection needs z > 0).
+            (fwd, 4.0 * scene.trace.eps),
+        ];
+        Self {
+            eye: frame.origin.into(),
+            planes,
+        }
+    }
+
+    /// The part of the segment `a b` inside, if any.
+    fn clip(&self, a: glam::Vec3, b: glam::Vec3) -> Option<(glam::Vec3, glam::Vec3)> {
+        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        for (n, off) in self.planes {
+            let (ga, gb) = (n.dot(a - self.eye) - off, n.dot(b - self.eye) - off);
+            if ga < 0.0 && gb < 0.0 {
+                return None;
+            }
+            if ga < 0.0 {
+                t0 = t0.max(ga / (ga - gb));
+            } else if gb < 0.0 {
+                t1 = t1.min(ga / (ga - gb));
+            }
+        }
+        (t0 < t1).then(|| (a + (b - a) * t0, a + (b - a) * t1))
+    }
+
+    /// True when the ball is entirely outside one of the planes.
+    fn misses_ball(&self, o: glam::Vec3, r: f32) -> bool {
+        self.planes.iter().any(|&(n, off)| {
+            let len = n.length();
+            len > 0.0 && (n.dot(o - self.eye) - off) / len < -r
+        })
+    }
+}
+
+/// How [`super::primary`] shares `samples` between shape silhouettes and emitter outlines:
+/// `(silhouette samples, outline samples)`, half each when both exist.
+pub fn split_samples(samples: u64, silhouettes: bool, outlines: bool) -> (u64, u64) {
+    match (silhouettes, outlines) {
+        (true, true) => (samples - samples / 2, samples / 2),
+        (false, true) => (0, samples),
+        _ => (samples, 0),
+    }
+}
+
+/// One splat: a pixel, its share of the radiance jump and of `W`'s jump.
+type Splat<S> = (usize, Vec3<S>, S);
+
+/// Adds the outline part of the primary term (eq. (2), `samples` samples of [`EDGE_STREAM`]) to
+/// `radiance[k]` and `coverage[k]` (directions `k < width` of `S`), the layout of
+/// [`super::primary::PrimaryTerm`]. Nothing to do when `outlines` is empty or `samples` is 0.
+pub fn add_outline_pass<S: Directions>(
+    scene: &Scene,
+    outlines: &EmitterOutlines,
+    width: usize,
+    seed: u64,
+    samples: u64,
+    radiance: &mut [Image],
+    coverage: &mut [Image],
+) {
+    if outlines.is_empty() || samples == 0 {
+        return;
+    }
+    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut splats = Vec::new();
+            let mut record = PathRecord::default();
+            let mut counters = TraceCounters::default();
+            let attach = SceneAttach::new(scene);
+            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+                let mut sampler = Sampler::new(seed, EDGE_STREAM, 0, k);
+                sample(
+                    scene,
+                    &attach,
+                    outlines,
+                    &mut sampler,
+                    &mut record,
+                    &mut splats,
+                    &mut counters,
+                );
+            }
+            splats
+        })
+        .collect();
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let n = (w * h) as usize;
+    let inv = 1.0 / samples as f64;
+    // Sum in f64 in sample order: the same result whatever the thread count.
+    let mut acc = vec![0.0f64; 3 * width * n];
+    let mut acc_w = vec![0.0f64; width * n];
+    for (pixel, v, c) in chunks.iter().flatten() {
+        for k in 0..width {
+            let base = 3 * (k * n + pixel);
+            acc[base] += v.x.direction(k) as f64;
+            acc[base + 1] += v.y.direction(k) as f64;
+            acc[base + 2] += v.z.direction(k) as f64;
+            acc_w[k * n + pixel] += c.direction(k) as f64;
+        }
+    }
+    for (k, (image, cov)) in radiance.iter_mut().zip(coverage).take(width).enumerate() {
+        let off = 3 * k * n;
+        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + 3 * n]) {
+            *d += (a * inv) as f32;
+        }
+        for (d, a) in cov.rgb.chunks_exact_mut(3).zip(&acc_w[k * n..(k + 1) * n]) {
+            for c in d {
+                *c += (a * inv) as f32;
+            }
+        }
+    }
+}
+
+/// The film velocity `∂π P_π(x)` of an attached point (derivative parts only; primal 0).
+#[inline]
+fn film_velocity<S: Scalar>(frame: &crate::camera::CameraFrame<S>, x: Vec3<S>) -> Option<(S, S)> {
+    let (px, py) = frame.project(x)?;
+    Some((px - px.detach(), py - py.detach()))
+}
+
+/// One sample of eq. (2): pushes `(pixel, radiance, coverage)` splats (not yet divided by `N`).
+fn sample<S: Directions>(
+    scene: &Scene,
+    attach: &SceneAttach,
+    outlines: &EmitterOutlines,
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    splats: &mut Vec<Splat<S>>,
+    counters: &mut TraceCounters,
+) {
+    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
+    let Some(pt) = outlines.sample([u0, u1]) else {
+        return;
+    };
+    let frame = scene.camera.frame::<f32>();
+    let eye: glam::Vec3 = frame.origin.into();
+    let (right, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
+        (frame.right.into(), frame.up.into(), frame.forward.into());
+    let focal = frame.focal;
+    let x_b = pt.x;
+    let q = x_b - eye;
+    let dist = q.length();
+    let z = q.dot(fwd);
+    if !(dist > 0.0 && dist.is_finite() && z > 0.0) {
+        return;
+    }
+    let Some((px, py)) = frame.project(Vec3::constant(x_b)) else {
+        return;
+    };
+    let filter = scene.camera.filter;
+    let radius = filter.radius();
+    let (wf, hf) = (scene.camera.width as f32, scene.camera.height as f32);
+    if px <= -radius || py <= -radius || px >= wf + radius || py >= hf + radius {
+        return;
+    }
+    // P' (2×3) at x_B, the image tangent P'T (its length is dℓ_img/dℓ) and the image of a step off
+    // the emitter P'm, which orients n_img.
+    let du = (right * z - fwd * q.dot(right)) * (focal / (z * z));
+    let dv = -(up * z - fwd * q.dot(up)) * (focal / (z * z));
+    let image = |a: glam::Vec3| glam::Vec2::new(du.dot(a), dv.dot(a));
+    let t_img = image(pt.tangent);
+    let len_img = t_img.length();
+    if !(len_img > 0.0 && len_img.is_finite()) {
+        return;
+    }
+    let mut n_img = glam::Vec2::new(-t_img.y, t_img.x) / len_img;
+    let off = image(pt.outward).dot(n_img);
+    // Edge-on: the outward step hardly moves the image (relative to the tangent's scale).
+    if off.is_nan() || off.abs() <= 1e-4 * len_img {
+        return;
+    }
+    if off < 0.0 {
+        n_img = -n_img;
+    }
+    // The background side: the camera ray through u_B + ε n_img, visible up to x_B's depth.
+    let (ux, uy) = (px + OFFSET_PIXELS * n_img.x, py + OFFSET_PIXELS * n_img.y);
+    let ray = frame.generate_ray(glam::Vec2::new(ux, uy));
+    let delta = (OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps);
+    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
+    if occluded(scene, &ray, dist - margin, None, counters) {
+        return;
+    }
+    trace_path(
+        scene,
+        ray,
+        scene.integrator.max_scatter(),
+        sampler,
+        record,
+        counters,
+    );
+    // The ray must have passed the emitter (it starts ε pixels off its outline).
+    if let Some(first) = record.vertices.first()
+        && first.kind == VertexKind::Emitter(pt.emitter)
+    {
+        return;
+    }
+    let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
+    // Eq. (1): the outline point's film velocity relative to the background's.
+    let fs = scene.camera.frame::<S>();
+    let n_e = match &scene.emitters[pt.emitter].emitter {
+        Emitter::Rectangle { normal, .. } => *normal,
+        _ => pt.outward,
+    };
+    let Some((ex, ey)) = film_velocity(&fs, attach.emitter_vertex::<S>(pt.emitter, x_b, n_e).x)
+    else {
+        return;
+    };
+    let background = match record.vertices.first().map(|v| (v.kind, v.p, v.n)) {
+        Some((VertexKind::Shape(i), p, n)) => {
+            film_velocity(&fs, attach.shape_vertex::<S>(i, p, n).x)
+        }
+        Some((VertexKind::Emitter(e), p, n)) => {
+            film_velocity(&fs, attach.emitter_vertex::<S>(e, p, n).x)
+        }
+        // At infinity (or nothing): the fixed direction projected with the lifted frame.
+        _ => film_velocity(&fs, fs.origin + Vec3::constant(ray.d)),
+    };
+    let Some((bx, by)) = background else {
+        return;
+    };
+    let v = (ex - bx) * n_img.x + (ey - by) * n_img.y;
+    let measure = len_img * outlines.total_length();
+    let scale = -l_bg * measure;
+    if !(scale.is_finite() && measure.is_finite()) {
+        return;
+    }
+    let value = Vec3::<S>::constant(scale) * v;
+    let cover = v * S::constant(-measure);
+    if !(0..S::COUNT).all(|k| {
+        value.x.direction(k).is_finite()
+            && value.y.direction(k).is_finite()
+            && value.z.direction(k).is_finite()
+            && cover.direction(k).is_finite()
+    }) {
+        return;
+    }
+    let (w, hh) = (scene.camera.width as i64, scene.camera.height as i64);
+    let reach = radius.ceil() as i64;
+    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
+    for jy in (cy - reach).max(0)..=(cy + reach).min(hh - 1) {
+        let dy = py - (jy as f32 + 0.5);
+        if dy.abs() >= radius {
+            continue;
+        }
+        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
+            let dx = px - (jx as f32 + 0.5);
+            if dx.abs() >= radius {
+                continue;
+            }
+            let fw = filter.eval::<f32>(dx, dy);
+            if fw != 0.0 {
+                let fw = S::constant(fw);
+                splats.push(((jy * w + jx) as usize, value * fw, cover * fw));
+            }
+        }
+    }
+}
