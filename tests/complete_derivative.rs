@@ -38,34 +38,34 @@ fn sphere_floor() {
             Check {
                 name: "ball.radius",
                 h: 0.02,
-                // L2 (0.045, 0.043), sums (0.024, 0.002); interior alone 0.34;
-                // FD noise 0.012, h/2 0.013.
-                l2: 0.1,
-                sum: 0.05,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.025, 0.025), sums ≤ 0.013; interior alone 0.385.
+                l2: 0.05,
+                sum: 0.03,
             },
             Check {
                 name: "ball.center.x",
                 h: 0.02,
-                // L2 (0.034, 0.033), sums (0.005, 0.014); interior alone 0.31;
-                // FD noise 0.016, h/2 0.012.
-                l2: 0.07,
-                sum: 0.03,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.024, 0.022), sums ≤ 0.017; interior alone 0.33.
+                l2: 0.05,
+                sum: 0.035,
             },
             Check {
                 name: "ball.center.y",
                 h: 0.02,
-                // L2 (0.054, 0.043), sums (0.047, 0.033); interior alone 0.16;
-                // FD noise 0.016, h/2 0.011.
-                l2: 0.11,
-                sum: 0.1,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.030, 0.025), sums ≤ 0.015; interior alone 0.29.
+                l2: 0.06,
+                sum: 0.03,
             },
             Check {
                 name: "light.center.x",
                 h: 0.05,
-                // L2 (0.019, 0.027), sums (0.003, 0.009); interior alone 0.24;
-                // FD noise 0.011, h/2 0.007.
-                l2: 0.06,
-                sum: 0.03,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.019, 0.018), sums ≤ 0.017; interior alone 0.24.
+                l2: 0.04,
+                sum: 0.035,
             },
         ],
         budget,
@@ -98,10 +98,10 @@ fn environment() {
             Check {
                 name: "donut.minor_radius",
                 h: 0.02,
-                // L2 (0.15, 0.11), sums (0.048, 0.034); interior alone 2.9;
-                // FD noise 0.10, h/2 0.073 (1024 spp).
-                l2: 0.3,
-                sum: 0.1,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.107, 0.101), sums ≤ 0.060; interior alone 1.05.
+                l2: 0.22,
+                sum: 0.12,
             },
         ],
         budget,
@@ -127,18 +127,18 @@ fn grid() {
             Check {
                 name: "baked_blob.translate.x",
                 h: 0.02,
-                // L2 (0.17, 0.24), sums (0.14, 0.075); interior alone 1.6;
-                // FD noise 0.066, h/2 0.045 (48×36).
-                l2: 0.5,
-                sum: 0.3,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.131, 0.161), sums ≤ 0.085; interior alone 0.67.
+                l2: 0.33,
+                sum: 0.17,
             },
             Check {
                 name: "baked_blob.sdf.scale",
                 h: 0.01,
-                // L2 (0.19, 0.19), sums (0.22, 0.10); interior alone 1.4;
-                // FD noise 0.058, h/2 0.043 (48×36).
-                l2: 0.4,
-                sum: 0.45,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.113, 0.114), sums ≤ 0.111; interior alone 0.81.
+                l2: 0.23,
+                sum: 0.23,
             },
         ],
         budget,
@@ -157,39 +157,37 @@ fn csg_direct() {
     check_against_fd("csg_direct", &scene, &csg_checks(), csg_budget(), 4);
 }
 
-fn csg_checks() -> [Check; 4] {
+/// `blob.k` is not among them: its signal is weak here (Σ|FD| 4.4) and the FD reference's own noise
+/// (0.19 at 1024 spp) is above what separates the complete derivative from the interior alone; the
+/// smooth union's `k` is checked in `hard_cases::concave_tangent_directions` instead.
+fn csg_checks() -> [Check; 3] {
     [
         Check {
             name: "blob_sphere.radius",
             h: 0.02,
-            // L2 (0.16, 0.16), sums (0.12, 0.059); interior alone 1.7;
-            // FD noise 0.094, h/2 0.064 (1024 spp).
-            l2: 0.33,
-            sum: 0.24,
-        },
-        Check {
-            name: "blob.k",
-            h: 0.02,
-            // L2 (0.16, 0.24), sums (0.094, 0.23): a weak signal (Σ|FD| 4.4);
-            // interior alone 0.58; FD noise 0.19, h/2 0.14 (1024 spp).
-            l2: 0.5,
-            sum: 0.47,
+            // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+            // direct: L2 (0.114, 0.118), sums ≤ 0.084, interior alone 0.61; path (2× budget):
+            // L2 (0.063, 0.073), sums ≤ 0.084, interior alone 0.67.
+            l2: 0.24,
+            sum: 0.17,
         },
         Check {
             name: "ring.sdf.child.minor_radius",
             h: 0.01,
-            // L2 (0.15, 0.15), sums (0.050, 0.014); interior alone 2.0;
-            // FD noise 0.15, h/2 0.12 (1024 spp).
-            l2: 0.31,
-            sum: 0.1,
+            // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+            // direct: L2 (0.136, 0.141), sums ≤ 0.049, interior alone 0.69; path (2× budget):
+            // L2 (0.091, 0.086), sums ≤ 0.065, interior alone 0.64.
+            l2: 0.29,
+            sum: 0.13,
         },
         Check {
             name: "ring.sdf.translate.x",
             h: 0.02,
-            // L2 (0.31, 0.31), sums (0.091, 0.071); interior alone 2.0. Noise, not
-            // bias: with 4× the samples everywhere L2 fell to (0.12, 0.15); FD noise 0.081, h/2 0.074.
-            l2: 0.63,
-            sum: 0.19,
+            // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+            // direct only: L2 (0.254, 0.300), sums ≤ 0.070, interior alone 0.85 (noise: at 4× the
+            // samples 0.12, 0.15).
+            l2: 0.6,
+            sum: 0.14,
         },
     ]
 }
@@ -203,21 +201,27 @@ fn csg_budget() -> Budget {
     }
 }
 
-/// csg.json as it is (`path`, three bounces). The bounds are the direct variant's, not yet measured
-/// against the path estimator (it refuses boundary terms today).
+/// csg.json as it is (`path`, three bounces), twice the direct variant's budget, with the direct
+/// variant's bounds (which hold the path measurements too) for the first two checks. The torus's
+/// translation is left to `csg_direct`: at this budget it measured 0.35 and 0.28 (noise: 0.14 at 4×
+/// the budget), too close to the interior alone (0.57) for the bound to tell them apart.
 #[test]
-#[ignore = "needs the path boundary terms (issue 4, in progress)"]
 fn csg_path() {
     let scene = scene_file("csg.json", 48, 36);
     assert!(matches!(scene.integrator, IntegratorKind::Path { .. }));
-    check_against_fd("csg_path", &scene, &csg_checks(), csg_budget(), 5);
+    let budget = csg_budget();
+    let budget = Budget {
+        spp: 2 * budget.spp,
+        primary: 2 * budget.primary,
+        secondary: 2 * budget.secondary,
+        fd_spp: 2 * budget.fd_spp,
+    };
+    check_against_fd("csg_path", &scene, &csg_checks()[..2], budget, 5);
 }
 
 /// The default scene with the `path` integrator (two bounces: the floor lights the ball's underside
-/// and the ball's shadow lightens). Bounds provisional (the direct variant's order of magnitude): to be
-/// set from two seeds once the path boundary terms land.
+/// and the ball's shadow lightens).
 #[test]
-#[ignore = "needs the path boundary terms (issue 4, in progress)"]
 fn sphere_floor_path() {
     let mut scene = scene_file("sphere_floor.json", 32, 32);
     scene.integrator = IntegratorKind::Path { max_depth: 2 };
@@ -234,14 +238,18 @@ fn sphere_floor_path() {
             Check {
                 name: "ball.radius",
                 h: 0.02,
-                l2: 0.1,
-                sum: 0.1,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.027, 0.032), sums ≤ 0.026; interior alone 0.39.
+                l2: 0.065,
+                sum: 0.05,
             },
             Check {
                 name: "light.center.x",
                 h: 0.05,
-                l2: 0.1,
-                sum: 0.1,
+                // Measured with the defaults of today (differentiable normalisation), seeds 0 and 1:
+                // L2 (0.017, 0.015), sums ≤ 0.006; interior alone 0.24.
+                l2: 0.035,
+                sum: 0.015,
             },
         ],
         budget,

@@ -14,8 +14,8 @@ pub mod emitter_edges;
 pub mod primary;
 pub mod secondary;
 pub mod segment;
-pub mod tangent_sampling;
 pub mod subpaths;
+pub mod tangent_sampling;
 
 pub use segment::{
     BoundarySegment, boundary_jacobian, boundary_velocity, is_silhouette_direction,
