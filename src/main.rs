@@ -428,8 +428,13 @@ struct BoundaryBudget {
     secondary: u32,
 }
 
-/// The `note:` line of `diff`: which terms `d.P` holds.
-fn terms_note(interior_only_reason: Option<&str>, budget: &BoundaryBudget) -> String {
+/// The `note:` line of `diff`: which terms `d.P` holds, and which shapes have crease edges (`(name,
+/// reason)`, [`Scene::creased_shapes`]), whose boundary terms are not sampled.
+fn terms_note(
+    interior_only_reason: Option<&str>,
+    budget: &BoundaryBudget,
+    creased: &[(String, String)],
+) -> String {
     if let Some(reason) = interior_only_reason {
         return format!(
             "note: derivatives hold the interior term only ({reason}); the silhouette and shadow \
@@ -458,10 +463,17 @@ fn terms_note(interior_only_reason: Option<&str>, budget: &BoundaryBudget) -> St
         [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
         [] => String::new(),
     };
-    format!(
-        "note: derivatives hold the {held} terms{missing}; not yet handled: creases, emitter edges \
-         seen directly, image borders"
-    )
+    let creases = if creased.is_empty() {
+        String::new()
+    } else {
+        let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
+        format!(
+            "; crease edges are not sampled, so where they move or hide what moves d.P misses their \
+             boundary terms: {}",
+            list.join(", ")
+        )
+    };
+    format!("note: derivatives hold the {held} terms{missing}{creases}")
 }
 
 /// The PNG of a derivative command: the image beside one colour-mapped panel per derivative. Returns it
@@ -556,7 +568,10 @@ fn diff(
     let (picture, scales) = derivative_picture(image, &derivatives);
     write_outputs(out, png, image, &channels, &picture)?;
 
-    println!("{}", terms_note(interior_only, &budget));
+    println!(
+        "{}",
+        terms_note(interior_only, &budget, &scene.creased_shapes())
+    );
     println!(
         "rendered {}x{} and {} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
         image.width,

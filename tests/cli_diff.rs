@@ -132,6 +132,12 @@ fn diff_writes_the_promised_channels() {
         ),
         "{stdout}"
     );
+    // The default scene's floor is a sharp box: the note names its creases.
+    assert!(
+        stdout.contains("crease edges are not sampled")
+            && stdout.contains("floor (sharp box (rounding 0))"),
+        "{stdout}"
+    );
     assert!(
         stdout.contains("d.ball.radius: PNG colour scale ±"),
         "{stdout}"
