@@ -66,6 +66,7 @@
 //! [`super::primary::render_primary_terms`] gives the primary term's samples to the silhouettes and to
 //! the outlines half and half when both exist ([`split_samples`]), all to one when the other is absent.
 
+use super::{Splat, accumulate_samples, finite_splat, on_film, splat_filtered};
 use crate::emitter::Emitter;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
@@ -77,13 +78,9 @@ use crate::math::Vec3;
 use crate::sampler::Sampler;
 use crate::scalar::Scalar;
 use crate::scene::Scene;
-use rayon::prelude::*;
 
 /// The random stream of emitter-outline samples (distinct from the silhouettes' and the camera's).
 pub const EDGE_STREAM: u64 = 0xED6E_0F11;
-
-/// Samples per parallel work item (gathered in sample order: deterministic).
-const CHUNK: u64 = 256;
 
 /// The film offset of the background ray from the outline, in pixels.
 const OFFSET_PIXELS: f32 = 0.02;
@@ -344,9 +341,6 @@ pub fn split_samples(samples: u64, silhouettes: bool, outlines: bool) -> (u64, u
     }
 }
 
-/// One splat: a pixel, its share of the radiance jump and of `W`'s jump.
-type Splat<S> = (usize, Vec3<S>, S);
-
 /// Adds the outline part of the primary term (eq. (2), `samples` samples of [`EDGE_STREAM`]) to
 /// `radiance[k]` and `coverage[k]` (directions `k < width` of `S`), the layout of
 /// [`super::primary::PrimaryTerm`]. Nothing to do when `outlines` is empty or `samples` is 0.
@@ -359,57 +353,30 @@ pub fn add_outline_pass<S: Directions>(
     radiance: &mut [Image],
     coverage: &mut [Image],
 ) {
-    if outlines.is_empty() || samples == 0 {
+    if outlines.is_empty() {
         return;
     }
-    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut splats = Vec::new();
-            let mut record = PathRecord::default();
-            let mut counters = TraceCounters::default();
-            let attach = SceneAttach::new(scene);
-            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-                let mut sampler = Sampler::new(seed, EDGE_STREAM, 0, k);
-                sample(
-                    scene,
-                    &attach,
-                    outlines,
-                    &mut sampler,
-                    &mut record,
-                    &mut splats,
-                    &mut counters,
-                );
-            }
-            splats
-        })
-        .collect();
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let n = (w * h) as usize;
-    let inv = 1.0 / samples as f64;
-    // Sum in f64 in sample order: the same result whatever the thread count.
-    let mut acc = vec![0.0f64; 3 * width * n];
-    let mut acc_w = vec![0.0f64; width * n];
-    for (pixel, v, c) in chunks.iter().flatten() {
-        for k in 0..width {
-            let base = 3 * (k * n + pixel);
-            acc[base] += v.x.direction(k) as f64;
-            acc[base + 1] += v.y.direction(k) as f64;
-            acc[base + 2] += v.z.direction(k) as f64;
-            acc_w[k * n + pixel] += c.direction(k) as f64;
-        }
-    }
-    for (k, (image, cov)) in radiance.iter_mut().zip(coverage).take(width).enumerate() {
-        let off = 3 * k * n;
-        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + 3 * n]) {
-            *d += (a * inv) as f32;
-        }
-        for (d, a) in cov.rgb.chunks_exact_mut(3).zip(&acc_w[k * n..(k + 1) * n]) {
-            for c in d {
-                *c += (a * inv) as f32;
-            }
-        }
-    }
+    let attach = SceneAttach::new(scene);
+    accumulate_samples::<S, _>(
+        scene,
+        width,
+        samples,
+        || (PathRecord::default(), TraceCounters::default()),
+        |(record, counters), k, splats| {
+            let mut sampler = Sampler::new(seed, EDGE_STREAM, 0, k);
+            sample(
+                scene,
+                &attach,
+                outlines,
+                &mut sampler,
+                record,
+                splats,
+                counters,
+            );
+        },
+        radiance,
+        coverage,
+    );
 }
 
 /// The film velocity `∂π P_π(x)` of an attached point (derivative parts only; primal 0).
@@ -448,10 +415,7 @@ fn sample<S: Directions>(
     let Some((px, py)) = frame.project(Vec3::constant(x_b)) else {
         return;
     };
-    let filter = scene.camera.filter;
-    let radius = filter.radius();
-    let (wf, hf) = (scene.camera.width as f32, scene.camera.height as f32);
-    if px <= -radius || py <= -radius || px >= wf + radius || py >= hf + radius {
+    if !on_film(scene, px, py) {
         return;
     }
     // P' (2×3) at x_B, the image tangent P'T (its length is dℓ_img/dℓ) and the image of a step off
@@ -527,32 +491,7 @@ fn sample<S: Directions>(
     }
     let value = Vec3::<S>::constant(scale) * v;
     let cover = v * S::constant(-measure);
-    if !(0..S::COUNT).all(|k| {
-        value.x.direction(k).is_finite()
-            && value.y.direction(k).is_finite()
-            && value.z.direction(k).is_finite()
-            && cover.direction(k).is_finite()
-    }) {
-        return;
-    }
-    let (w, hh) = (scene.camera.width as i64, scene.camera.height as i64);
-    let reach = radius.ceil() as i64;
-    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
-    for jy in (cy - reach).max(0)..=(cy + reach).min(hh - 1) {
-        let dy = py - (jy as f32 + 0.5);
-        if dy.abs() >= radius {
-            continue;
-        }
-        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
-            let dx = px - (jx as f32 + 0.5);
-            if dx.abs() >= radius {
-                continue;
-            }
-            let fw = filter.eval::<f32>(dx, dy);
-            if fw != 0.0 {
-                let fw = S::constant(fw);
-                splats.push(((jy * w + jx) as usize, value * fw, cover * fw));
-            }
-        }
+    if finite_splat(&value, cover) {
+        splat_filtered(scene, (px, py), value, cover, splats);
     }
 }

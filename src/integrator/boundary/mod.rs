@@ -26,7 +26,9 @@ use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::attach::window_slots;
 use crate::integrator::derivative::Directions;
+use crate::math::Vec3;
 use crate::scene::Scene;
+use rayon::prelude::*;
 
 /// The boundary terms exist for both integrators (`direct` is `path` with one scattering vertex) and
 /// continuous pixel filters; `term` names the term in the error.
@@ -53,4 +55,127 @@ fn in_windows<S: Directions>(
         out.extend(pass(&window_slots(scene, lo, S::COUNT), width));
     }
     out
+}
+
+/// One splat of a boundary sample: a pixel, its share of the radiance jump and of the jump of the pixel
+/// filter's own integral `W` (0 for the secondary term: its jumps leave `W` unchanged).
+pub(crate) struct Splat<S> {
+    pixel: usize,
+    radiance: Vec3<S>,
+    coverage: S,
+}
+
+/// Boundary samples per parallel work item (results are gathered in sample order: deterministic).
+const CHUNK: u64 = 256;
+
+/// Runs boundary samples `0..samples` in parallel chunks (`state()` once per chunk, `sample(state, k,
+/// splats)` for sample `k`) and adds the mean of their splats to `radiance[k]` and `coverage[k]` (the
+/// same value in the three channels) for directions `k < width` of `S`. The splats are summed in `f64`
+/// in sample order: the result does not depend on the thread count.
+pub(crate) fn accumulate_samples<S: Directions, T>(
+    scene: &Scene,
+    width: usize,
+    samples: u64,
+    state: impl Fn() -> T + Sync,
+    sample: impl Fn(&mut T, u64, &mut Vec<Splat<S>>) + Sync,
+    radiance: &mut [Image],
+    coverage: &mut [Image],
+) {
+    if samples == 0 {
+        return;
+    }
+    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut splats = Vec::new();
+            let mut st = state();
+            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+                sample(&mut st, k, &mut splats);
+            }
+            splats
+        })
+        .collect();
+    let n = (scene.camera.width * scene.camera.height) as usize;
+    let mut acc = vec![0.0f64; 3 * width * n];
+    let mut acc_w = vec![0.0f64; width * n];
+    for s in chunks.iter().flatten() {
+        for k in 0..width {
+            let base = 3 * (k * n + s.pixel);
+            acc[base] += s.radiance.x.direction(k) as f64;
+            acc[base + 1] += s.radiance.y.direction(k) as f64;
+            acc[base + 2] += s.radiance.z.direction(k) as f64;
+            acc_w[k * n + s.pixel] += s.coverage.direction(k) as f64;
+        }
+    }
+    let inv = 1.0 / samples as f64;
+    for (k, image) in radiance.iter_mut().take(width).enumerate() {
+        for (d, a) in image.rgb.iter_mut().zip(&acc[3 * k * n..3 * (k + 1) * n]) {
+            *d += (a * inv) as f32;
+        }
+    }
+    for (k, image) in coverage.iter_mut().take(width).enumerate() {
+        for (d, a) in image
+            .rgb
+            .chunks_exact_mut(3)
+            .zip(&acc_w[k * n..(k + 1) * n])
+        {
+            for c in d {
+                *c += (a * inv) as f32;
+            }
+        }
+    }
+}
+
+/// Whether a film point `(px, py)` (pixels) lies within the filter's reach of some pixel of the image.
+pub(crate) fn on_film(scene: &Scene, px: f32, py: f32) -> bool {
+    let r = scene.camera.filter.radius();
+    let (w, h) = (scene.camera.width as f32, scene.camera.height as f32);
+    px > -r && py > -r && px < w + r && py < h + r
+}
+
+/// Whether every direction of a splat's values is finite.
+pub(crate) fn finite_splat<S: Directions>(radiance: &Vec3<S>, coverage: S) -> bool {
+    (0..S::COUNT).all(|k| {
+        radiance.x.direction(k).is_finite()
+            && radiance.y.direction(k).is_finite()
+            && radiance.z.direction(k).is_finite()
+            && coverage.direction(k).is_finite()
+    })
+}
+
+/// Pushes the splats of values `radiance` and `coverage` at film point `(px, py)` to every pixel whose
+/// filter covers it, weighted by that filter.
+pub(crate) fn splat_filtered<S: Directions>(
+    scene: &Scene,
+    (px, py): (f32, f32),
+    radiance: Vec3<S>,
+    coverage: S,
+    splats: &mut Vec<Splat<S>>,
+) {
+    let filter = scene.camera.filter;
+    let radius = filter.radius();
+    let (w, h) = (scene.camera.width as i64, scene.camera.height as i64);
+    let reach = radius.ceil() as i64;
+    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
+    for jy in (cy - reach).max(0)..=(cy + reach).min(h - 1) {
+        let dy = py - (jy as f32 + 0.5);
+        if dy.abs() >= radius {
+            continue;
+        }
+        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
+            let dx = px - (jx as f32 + 0.5);
+            if dx.abs() >= radius {
+                continue;
+            }
+            let fw = filter.eval::<f32>(dx, dy);
+            if fw != 0.0 {
+                let fw = S::constant(fw);
+                splats.push(Splat {
+                    pixel: (jy * w + jx) as usize,
+                    radiance: radiance * fw,
+                    coverage: coverage * fw,
+                });
+            }
+        }
+    }
 }

@@ -103,7 +103,9 @@
 
 use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
-use super::{check_supported, in_windows};
+use super::{
+    Splat, accumulate_samples, check_supported, finite_splat, in_windows, on_film, splat_filtered,
+};
 use crate::error::Result;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
@@ -117,13 +119,9 @@ use crate::integrator::silhouette_curve::{
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use rayon::prelude::*;
 
 /// The random stream of primary boundary samples (distinct from the camera's and the secondary term's).
 pub const PRIMARY_STREAM: u64 = 0x9121_B0DA;
-
-/// Samples per parallel work item (results are gathered in sample order: deterministic).
-const CHUNK: u64 = 256;
 
 /// The primary boundary term of the derivative with respect to the parameters in slots `0..count`
 /// (selected with [`Scene::select_parameters`]) for the `fixed` pixel normalisation, estimated with
@@ -240,59 +238,32 @@ fn pass<S: Directions>(
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mut images = vec![Image::new(w, h); width];
     let mut coverage = vec![Image::new(w, h); width];
-    if curves.is_empty() || samples == 0 {
+    if curves.is_empty() {
         return (images, coverage);
     }
-    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut splats = Vec::new();
-            let mut record = PathRecord::default();
-            let mut counters = TraceCounters::default();
-            let attach = SceneAttach::new(scene);
-            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-                let mut sampler = Sampler::new(seed, PRIMARY_STREAM, 0, k);
-                sample(
-                    scene,
-                    &attach,
-                    curves,
-                    &mut sampler,
-                    &mut record,
-                    &mut splats,
-                    &mut counters,
-                );
-            }
-            splats
-        })
-        .collect();
-    let inv = 1.0 / samples as f64;
-    // Sum in f64 in sample order: the same result whatever the thread count.
-    let n = (w * h) as usize;
-    let mut acc = vec![0.0f64; 3 * width * n];
-    let mut acc_w = vec![0.0f64; width * n];
-    for (pixel, v, c) in chunks.iter().flatten() {
-        for k in 0..width {
-            let base = 3 * (k * n + pixel);
-            acc[base] += v.x.direction(k) as f64;
-            acc[base + 1] += v.y.direction(k) as f64;
-            acc[base + 2] += v.z.direction(k) as f64;
-            acc_w[k * n + pixel] += c.direction(k) as f64;
-        }
-    }
-    for (k, (image, cov)) in images.iter_mut().zip(&mut coverage).enumerate() {
-        let off = 3 * k * n;
-        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + 3 * n]) {
-            *d = (a * inv) as f32;
-        }
-        for (d, a) in cov.rgb.chunks_exact_mut(3).zip(&acc_w[k * n..(k + 1) * n]) {
-            d.fill((a * inv) as f32);
-        }
-    }
+    let attach = SceneAttach::new(scene);
+    accumulate_samples::<S, _>(
+        scene,
+        width,
+        samples,
+        || (PathRecord::default(), TraceCounters::default()),
+        |(record, counters), k, splats| {
+            let mut sampler = Sampler::new(seed, PRIMARY_STREAM, 0, k);
+            sample(
+                scene,
+                &attach,
+                curves,
+                &mut sampler,
+                record,
+                splats,
+                counters,
+            );
+        },
+        &mut images,
+        &mut coverage,
+    );
     (images, coverage)
 }
-
-/// One splat: a pixel, its share of the radiance jump (eq. (2)) and of `W`'s jump (eq. (3)).
-type Splat<S> = (usize, Vec3<S>, S);
 
 /// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
 fn sample<S: Directions>(
@@ -333,10 +304,7 @@ fn sample<S: Directions>(
     let Some((px, py)) = frame.project(Vec3::constant(x_b)) else {
         return;
     };
-    let filter = scene.camera.filter;
-    let radius = filter.radius();
-    let (wf, hf) = (scene.camera.width as f32, scene.camera.height as f32);
-    if px <= -radius || py <= -radius || px >= wf + radius || py >= hf + radius {
+    if !on_film(scene, px, py) {
         return;
     }
     let (_, _, grad, _) = silhouette_functions(shape, eye, x_b);
@@ -412,32 +380,7 @@ fn sample<S: Directions>(
     }
     let value = Vec3::<S>::constant(scale) * v;
     let cover = v * S::constant(-measure);
-    if !(0..S::COUNT).all(|k| {
-        value.x.direction(k).is_finite()
-            && value.y.direction(k).is_finite()
-            && value.z.direction(k).is_finite()
-            && cover.direction(k).is_finite()
-    }) {
-        return;
-    }
-    let (w, hh) = (scene.camera.width as i64, scene.camera.height as i64);
-    let reach = radius.ceil() as i64;
-    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
-    for jy in (cy - reach).max(0)..=(cy + reach).min(hh - 1) {
-        let dy = py - (jy as f32 + 0.5);
-        if dy.abs() >= radius {
-            continue;
-        }
-        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
-            let dx = px - (jx as f32 + 0.5);
-            if dx.abs() >= radius {
-                continue;
-            }
-            let fw = filter.eval::<f32>(dx, dy);
-            if fw != 0.0 {
-                let fw = S::constant(fw);
-                splats.push(((jy * w + jx) as usize, value * fw, cover * fw));
-            }
-        }
+    if finite_splat(&value, cover) {
+        splat_filtered(scene, (px, py), value, cover, splats);
     }
 }

@@ -121,7 +121,7 @@
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{check_supported, in_windows};
+use super::{Splat, accumulate_samples, check_supported, finite_splat, in_windows, splat_filtered};
 use crate::error::Result;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
@@ -132,7 +132,6 @@ use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scene::{Intersection, Scene, Surface};
-use rayon::prelude::*;
 
 /// The random stream of boundary samples (distinct from the camera's
 /// [`crate::integrator::CAMERA_STREAM`]).
@@ -140,9 +139,6 @@ pub const BOUNDARY_STREAM: u64 = 0x5EC0_4DA2;
 
 /// The random stream of the subpaths (camera-side walk, light-side path) of a segment.
 pub const SUBPATH_STREAM: u64 = 0x5AB_9A7E;
-
-/// Boundary samples per parallel work item (results are gathered in sample order: deterministic).
-const CHUNK: u64 = 256;
 
 /// The secondary boundary term of the derivative with respect to the parameters in slots `0..count`
 /// (selected with [`Scene::select_parameters`]), estimated with `samples` boundary samples for the whole
@@ -205,7 +201,7 @@ fn pass<S: Directions>(
         })
         .collect();
     let mut images = vec![Image::new(w, h); width];
-    if candidates.is_empty() || samples == 0 {
+    if candidates.is_empty() {
         return images;
     }
     let ctx = Context {
@@ -214,36 +210,18 @@ fn pass<S: Directions>(
         candidates,
         tangent: TangentSampler::new(scene, tangent),
     };
-    let chunks: Vec<Vec<(usize, Vec3<S>)>> = (0..samples.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut splats = Vec::new();
-            let mut hits = Vec::new();
-            let mut counters = TraceCounters::default();
-            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-                let mut sampler = Sampler::new(seed, BOUNDARY_STREAM, 0, k);
-                ctx.sample(&mut sampler, &mut hits, &mut splats, &mut counters);
-            }
-            splats
-        })
-        .collect();
-    let inv = 1.0 / samples as f64;
-    // Sum in f64 in sample order: the same result whatever the thread count.
-    let mut acc = vec![0.0f64; 3 * width * (w * h) as usize];
-    for (pixel, v) in chunks.iter().flatten() {
-        for k in 0..width {
-            let base = 3 * (k * (w * h) as usize + pixel);
-            acc[base] += v.x.direction(k) as f64;
-            acc[base + 1] += v.y.direction(k) as f64;
-            acc[base + 2] += v.z.direction(k) as f64;
-        }
-    }
-    for (k, image) in images.iter_mut().enumerate() {
-        let (off, len) = (3 * k * (w * h) as usize, image.rgb.len());
-        for (d, a) in image.rgb.iter_mut().zip(&acc[off..off + len]) {
-            *d = (a * inv) as f32;
-        }
-    }
+    accumulate_samples::<S, _>(
+        scene,
+        width,
+        samples,
+        || (Vec::new(), TraceCounters::default()),
+        |(hits, counters), k, splats| {
+            let mut sampler = Sampler::new(seed, BOUNDARY_STREAM, 0, k);
+            ctx.sample(&mut sampler, hits, splats, counters);
+        },
+        &mut images,
+        &mut [],
+    );
     images
 }
 
@@ -286,7 +264,7 @@ impl Context<'_> {
         &self,
         sampler: &mut Sampler,
         hits: &mut Vec<SurfaceSample>,
-        splats: &mut Vec<(usize, Vec3<S>)>,
+        splats: &mut Vec<Splat<S>>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
@@ -347,7 +325,7 @@ impl Context<'_> {
         s_end: &Intersection,
         d_end: &Intersection,
         weight: f32,
-        splats: &mut Vec<(usize, Vec3<S>)>,
+        splats: &mut Vec<Splat<S>>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
@@ -478,10 +456,6 @@ impl Context<'_> {
                 (seg.jacobian_directional(), v)
             }
         };
-        let filter = scene.camera.filter;
-        let radius = filter.radius();
-        let (w, h) = (scene.camera.width as i64, scene.camera.height as i64);
-        let reach = radius.ceil() as i64;
         for cam in &cams {
             // Emitter and environment ends: the same radiance at every depth.
             let (l, g) = radiance[((cam.depth - 1) as usize).min(radiance.len() - 1)];
@@ -491,30 +465,8 @@ impl Context<'_> {
                 continue;
             }
             let value = Vec3::<S>::constant(scale) * v;
-            if !(0..S::COUNT).all(|k| {
-                value.x.direction(k).is_finite()
-                    && value.y.direction(k).is_finite()
-                    && value.z.direction(k).is_finite()
-            }) {
-                continue;
-            }
-            let (px, py) = (cam.film.x, cam.film.y);
-            let (cx, cy) = (px.floor() as i64, py.floor() as i64);
-            for jy in (cy - reach).max(0)..=(cy + reach).min(h - 1) {
-                let dy = py - (jy as f32 + 0.5);
-                if dy.abs() >= radius {
-                    continue;
-                }
-                for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
-                    let dx = px - (jx as f32 + 0.5);
-                    if dx.abs() >= radius {
-                        continue;
-                    }
-                    let fw = filter.eval::<f32>(dx, dy);
-                    if fw != 0.0 {
-                        splats.push(((jy * w + jx) as usize, value * S::constant(fw)));
-                    }
-                }
+            if finite_splat(&value, S::zero()) {
+                splat_filtered(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
             }
         }
     }
