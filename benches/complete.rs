@@ -2,7 +2,8 @@
 //! (`scenes/sphere_floor.json`, 64×64, direct), measured in one run:
 //!
 //! 1. **Cost**: complete-derivative time / primal time at the same spp (the scene's 64) with `diff`'s
-//!    default boundary budgets (16 silhouette and 64 shadow samples per pixel), one parameter. Goal ≤ 3.
+//!    default boundary budgets (`default_boundary_spp`: 2 silhouette and 8 shadow samples per pixel at
+//!    64 spp), one parameter; also with 4× those budgets. Goal ≤ 3.
 //! 2. **Time to 5% error**, this estimator against central finite differences (common random numbers,
 //!    `h = 0.01`), for `ball.radius`, `ball.center.x` and `light.center.x`: each method's budget is doubled
 //!    until the relative L2 error after a 5×5 box blur (all three channels) against a reference falls below
@@ -16,7 +17,7 @@
 use implicit_psdr::compare::{box_blur, relative_l2};
 use implicit_psdr::film::Image;
 use implicit_psdr::integrator::derivative::{
-    DiffOptions, render_derivatives, render_derivatives_with_boundary,
+    DiffOptions, default_boundary_spp, render_derivatives, render_derivatives_with_boundary,
 };
 use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::integrator::{RenderOptions, render};
@@ -31,9 +32,6 @@ const REF_SPP: u32 = 4096;
 const H: f32 = 0.01;
 /// The error to reach.
 const TARGET: f64 = 0.05;
-/// `diff`'s default boundary budgets per pixel (16 and 64), relative to the scene's 64 spp.
-const PRIMARY_PER_SPP: f64 = 0.25;
-const SECONDARY_PER_SPP: f64 = 1.0;
 
 fn default_scene() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
@@ -75,11 +73,11 @@ fn blurred_error(a: &Image, reference: &Image) -> f64 {
     (num / den).sqrt()
 }
 
-/// The complete derivative with `spp` camera samples and the default boundary budgets scaled to it.
-fn complete(scene: &Scene, spp: u32, seed: u64) -> Image {
-    let pixels = (scene.camera.width * scene.camera.height) as f64;
-    let primary = (PRIMARY_PER_SPP * spp as f64 * pixels).ceil() as u64;
-    let secondary = (SECONDARY_PER_SPP * spp as f64 * pixels).ceil() as u64;
+/// The complete derivative with `spp` camera samples and `boost` times `diff`'s default boundary budgets.
+fn complete(scene: &Scene, spp: u32, seed: u64, boost: u64) -> Image {
+    let pixels = (scene.camera.width * scene.camera.height) as u64;
+    let (p, s) = default_boundary_spp(spp);
+    let (primary, secondary) = (boost * p as u64 * pixels, boost * s as u64 * pixels);
     let out = render_derivatives_with_boundary(scene, 1, &options(spp, seed), primary, secondary)
         .expect("the default scene supports every term");
     out.total().remove(0)
@@ -118,7 +116,7 @@ fn main() {
     let spp = 64;
     let render_options = options(spp, 0).render;
     black_box(render(&plain, &render_options));
-    let (mut tp, mut ti, mut tc) = (vec![], vec![], vec![]);
+    let (mut tp, mut ti, mut tc, mut t4) = (vec![], vec![], vec![], vec![]);
     for _ in 0..reps {
         let t = Instant::now();
         black_box(render(&plain, &render_options));
@@ -127,10 +125,13 @@ fn main() {
         black_box(render_derivatives(&one, 1, &options(spp, 0)).unwrap());
         ti.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(complete(&one, spp, 0));
+        black_box(complete(&one, spp, 0, 1));
         tc.push(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        black_box(complete(&one, spp, 0, 4));
+        t4.push(t.elapsed().as_secs_f64());
     }
-    let (p, i, c) = (median(tp), median(ti), median(tc));
+    let (p, i, c, c4) = (median(tp), median(ti), median(tc), median(t4));
     println!("default scene 64x64, {spp} spp, direct, ball.radius, median of {reps}:");
     println!("  primal                 {:8.1} ms", p * 1e3);
     println!(
@@ -138,10 +139,18 @@ fn main() {
         i * 1e3,
         i / p
     );
+    let (bp, bs) = default_boundary_spp(spp);
     println!(
-        "  complete (16+64 boundary samples per pixel) {:8.1} ms  ratio {:.2} (goal <= 3)",
+        "  complete ({bp}+{bs} boundary samples per pixel) {:8.1} ms  ratio {:.2} (goal <= 3)",
         c * 1e3,
         c / p
+    );
+    println!(
+        "  complete ({}+{} boundary samples per pixel) {:8.1} ms  ratio {:.2}",
+        4 * bp,
+        4 * bs,
+        c4 * 1e3,
+        c4 / p
     );
 
     println!(
@@ -159,7 +168,7 @@ fn main() {
         let own = blurred_error(&second, &reference) / std::f64::consts::SQRT_2;
         let mut scene = default_scene();
         scene.select_parameters(&[name.to_string()]).unwrap();
-        let (ours, ours_err) = time_to_target(&reference, 1024, |spp| complete(&scene, spp, 7));
+        let (ours, ours_err) = time_to_target(&reference, 1024, |spp| complete(&scene, spp, 7, 1));
         let (fd, fd_err) = time_to_target(&reference, REF_SPP / 2, |spp| {
             finite_difference(&plain, name, H, &fd_options(spp, 7)).unwrap()
         });

@@ -8,7 +8,9 @@
 use implicit_psdr::film::colormap::{derivative_panel, diverging, side_by_side, srgb_decode};
 use implicit_psdr::film::{Image, write_png};
 use implicit_psdr::integrator::RenderOptions;
-use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives_with_boundary};
+use implicit_psdr::integrator::derivative::{
+    DiffOptions, default_boundary_spp, render_derivatives_with_boundary,
+};
 use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::scene::load;
 use std::path::Path;
@@ -51,13 +53,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         ..DiffOptions::default()
     };
-    // Boundary budgets in the proportions of `diff`'s defaults (16 and 64 per pixel at 64 spp).
+    // Four times `diff`'s default boundary budgets: the figure should show each term clearly.
+    let (bp, bs) = default_boundary_spp(spp);
     let d = render_derivatives_with_boundary(
         &scene,
         1,
         &options,
-        pixels * spp as u64 / 4,
-        pixels * spp as u64,
+        4 * pixels * bp as u64,
+        4 * pixels * bs as u64,
     )?;
     let value = reference
         .parameters()

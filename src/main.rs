@@ -8,7 +8,8 @@ use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 use implicit_psdr::film::{Image, colormap};
 use implicit_psdr::integrator::derivative::{
-    DiffOptions, Normalization, render_derivatives, render_derivatives_with_boundary,
+    DiffOptions, Normalization, default_boundary_spp, render_derivatives,
+    render_derivatives_with_boundary,
 };
 use implicit_psdr::integrator::{self, RenderOptions, fd};
 use implicit_psdr::{compare, film, scene, sdf};
@@ -81,12 +82,14 @@ enum Command {
         /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_secondary.P.R|G|B`).
         #[arg(long)]
         terms: bool,
-        /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it.
-        #[arg(long, default_value_t = DEFAULT_SPP_SECONDARY)]
-        spp_secondary: u32,
-        /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it.
-        #[arg(long, default_value_t = DEFAULT_SPP_PRIMARY)]
-        spp_primary: u32,
+        /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it [default: spp/8,
+        /// rounded up].
+        #[arg(long)]
+        spp_secondary: Option<u32>,
+        /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it [default:
+        /// spp/32, rounded up].
+        #[arg(long)]
+        spp_primary: Option<u32>,
         /// Pixel normalisation: `differentiable` (F / W, both differentiated: lower error) or `fixed`
         /// (the filter-weight sum is a constant).
         #[arg(long, value_enum, default_value_t = NormalizationArg::Differentiable)]
@@ -417,13 +420,15 @@ fn params(scene_path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Default boundary samples per pixel of the secondary term (`diff --spp-secondary`).
-const DEFAULT_SPP_SECONDARY: u32 = 64;
-/// Default silhouette-curve samples per pixel of the primary term (`diff --spp-primary`).
-const DEFAULT_SPP_PRIMARY: u32 = 16;
-
-/// Boundary samples per pixel of each boundary term (0 skips it).
+/// Boundary samples per pixel of each boundary term (0 skips it; `None`: the default for the spp,
+/// [`default_boundary_spp`]).
 struct BoundaryBudget {
+    primary: Option<u32>,
+    secondary: Option<u32>,
+}
+
+/// Boundary samples per pixel of each boundary term, resolved (0 skips it).
+struct BoundarySpp {
     primary: u32,
     secondary: u32,
 }
@@ -432,7 +437,7 @@ struct BoundaryBudget {
 /// reason)`, [`Scene::creased_shapes`]), whose boundary terms are not sampled.
 fn terms_note(
     interior_only_reason: Option<&str>,
-    budget: &BoundaryBudget,
+    budget: &BoundarySpp,
     creased: &[(String, String)],
 ) -> String {
     if let Some(reason) = interior_only_reason {
@@ -518,6 +523,11 @@ fn diff(
     let options = DiffOptions {
         render: render_options(&scene, spp, seed),
         normalization,
+    };
+    let (primary, secondary) = default_boundary_spp(options.render.spp);
+    let budget = BoundarySpp {
+        primary: budget.primary.unwrap_or(primary),
+        secondary: budget.secondary.unwrap_or(secondary),
     };
     // Both integrators have both boundary terms; without a budget for either the interior term stands
     // alone and the note says so.

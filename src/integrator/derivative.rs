@@ -185,6 +185,13 @@ pub fn render_derivatives_in<S: Directions>(
     })
 }
 
+/// `diff`'s default boundary budgets in samples per pixel, `(primary, secondary)`, for `spp` camera
+/// samples per pixel: `(⌈spp/32⌉, ⌈spp/8⌉)`. These proportions gave the lowest error × time on the
+/// default scene (README, "Boundary sample budgets"); the optimum is broad.
+pub fn default_boundary_spp(spp: u32) -> (u32, u32) {
+    (spp.div_ceil(32).max(1), spp.div_ceil(8).max(1))
+}
+
 /// [`render_derivatives`] plus the boundary terms: the primary term with `primary_samples` curve samples
 /// and the secondary term with `secondary_samples` boundary samples for the whole image (0 skips a term).
 /// Errors as each term (both integrators have both terms).
