@@ -13,6 +13,7 @@
 mod common;
 
 use common::deriv::*;
+use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::scene::Scene;
 
 /// A `direct` scene of `size × size` pixels (tent filter) from JSON fragments: the camera's `origin`,
@@ -414,19 +415,17 @@ fn light_touching_an_occluder() {
 
 /// The primary term's image sum for a diffuse ball in a constant environment `L = 1` has a closed form,
 /// whatever the samples: `Σ_pixels Σ_channels = −3 L dR/dr 2πR` (`R = f tan α`, `sin α = r/D` the
-/// projected radius, `dR/dr = f / (D cos³α)`; the tent's translates sum to 1 inside the image). For a
-/// circle the estimate of the sum does not depend on the seed (measured: identical with seeds 1, 2, 3),
-/// so the tolerance is tight: 0.3%. Measured: R = 11.4 px −2590.43 vs −2590.28 (0.006%), R = 0.5 px
-/// −103.615 vs −103.613 (0.002%), R = 0.33 px −67.93 vs −68.31 (0.56%), R = 0.22 px −44.83 vs −45.53
-/// (1.55%): the sum falls short for sub-pixel silhouettes, as if the sampled curve were a polygon of
-/// about ten chords (`1 − sin(π/N)/(π/N) ≈ 1.6%` for `N = 10`). Suspect: `silhouette_curve`'s density
-/// is exact only when its boxes are small against the curve's radius of curvature (its module docs),
-/// which a silhouette of radius 0.02 (world) may not reach.
+/// projected radius, `dR/dr = f / (D cos³α)`; the tent's translates sum to 1 inside the image). That is
+/// the `radiance` part of the term ([`render_primary`], the `fixed` normalisation; `differentiable` adds
+/// `−I·coverage`). For a circle the estimate of the sum does not depend on the seed, so the tolerance is
+/// tight: 0.3%. Measured (seed 21): R = 0.5 px −103.6147 vs −103.6127, R = 0.22 px −45.5354 vs −45.5346
+/// (0.002% both). It used to fall 1.55% short at 0.22 px (0.56% at 0.33 px): `solve_on_plane` stopped
+/// Newton at a step of `4 eps` in absolute terms, which on a curve of radius 0.02 left `|ψ|` above its
+/// tolerance, so face crossings were lost and the extracted curve had gaps (54 open ends).
 #[test]
-#[ignore = "bug: primary term sum 1.6% short of the closed form for a silhouette 0.22 px in radius (issue 4)"]
 fn tiny_silhouette_primary_sum_matches_closed_form() {
     for r in [0.0455f32, 0.02] {
-        let s = scene_json(&format!(
+        let mut s = scene_json(&format!(
             r#"{{"camera": {{"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
                   "width": 32, "height": 32, "filter": "tent"}},
                 "integrator": {{"type": "direct"}},
@@ -435,13 +434,14 @@ fn tiny_silhouette_primary_sum_matches_closed_form() {
                 "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#,
             diffuse(0.5)
         ));
-        let t = &derivative_terms(&s, &["ball.radius"], 1, 100_000, 0, seed(21))[0];
+        s.select_parameters(&["ball.radius".to_string()]).unwrap();
+        let primary = render_primary(&s, 1, &diff_options(1, seed(21)), 100_000).unwrap();
         let f = 16.0f64 / 20.0f64.to_radians().tan();
         let sin_a = r as f64 / 4.0;
         let cos_a = (1.0 - sin_a * sin_a).sqrt();
         let big_r = f * sin_a / cos_a;
         let expected = -3.0 * f / (4.0 * cos_a.powi(3)) * 2.0 * std::f64::consts::PI * big_r;
-        let sum: f64 = t.primary.iter().sum();
+        let sum: f64 = gray(&primary[0]).iter().sum();
         println!("R = {big_r:.3} px: primary sum {sum:.4}, closed form {expected:.4}");
         assert!(
             (sum - expected).abs() <= 3e-3 * expected.abs(),

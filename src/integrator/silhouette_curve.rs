@@ -131,8 +131,9 @@ pub fn silhouette_functions(shape: &Shape, eye: Vec3, x: Vec3) -> (f32, f32, Vec
 /// Each step solves the 3×3 system with rows `∇φ, ∇ψ, n` (f64 solve of f32 evaluations). Fails when the
 /// system is singular (the curve is tangent to the plane or `∇φ ∥ ∇ψ`), when an iterate leaves the ball
 /// of radius `reach` around `x0` (so a root of another branch is not taken), or when the residuals are
-/// not below the tolerance once the Newton step has reached the f32 resolution of `x` (`|φ| ≤ 1e-5·scale`,
-/// `|ψ| ≤ 1e-5·|∇φ||c − x|·scale`, `scale = max(1, |x|)`; typically they are at their rounding floor, ~1e-7).
+/// not below the tolerance once the Newton step has reached the f32 resolution of `x` (or, for `x` near the
+/// origin, that of `scale` and stopped shrinking) (`|φ| ≤ 1e-5·scale`, `|ψ| ≤ 1e-5·|∇φ||c − x|·scale`,
+/// `scale = max(1, |x|)`; typically they are at their rounding floor, ~1e-7).
 pub fn solve_on_plane(
     shape: &Shape,
     eye: Vec3,
@@ -145,6 +146,7 @@ pub fn solve_on_plane(
     let mut x = x0.as_dvec3();
     // Start on the plane: the other two equations are then solved within it.
     x += nd * ((c as f64 - nd.dot(x)) / nd.length_squared());
+    let mut prev = f64::INFINITY;
     for _ in 0..24 {
         let xf = x.as_vec3();
         let (phi, psi, gphi, gpsi) = silhouette_functions(shape, eye, xf);
@@ -159,13 +161,19 @@ pub fn solve_on_plane(
         if !step.is_finite() {
             return None;
         }
-        // Stop once the step is at the f32 resolution of x: the residuals are then at their rounding floor.
+        // Stop once the step is at the f32 resolution of x, or below that of the unit (the rounding floor
+        // of φ and ψ for shapes of unit size) and no longer converging: the residuals are then at their
+        // rounding floor. Stopping at the unit's resolution alone is too early on a small curve (a sphere
+        // of radius 0.02: a step of 3e-7 left |ψ| = 5e-5, above the tolerance, and lost the crossing).
         let scale = xf.length().max(1.0);
-        if step.length() <= 4.0 * f32::EPSILON as f64 * scale as f64 {
+        let len = step.length();
+        let eps = 4.0 * f32::EPSILON as f64;
+        if len <= eps * xf.length() as f64 || (len <= eps * scale as f64 && len > 0.5 * prev) {
             let ok = phi.abs() <= 1e-5 * scale
                 && psi.abs() <= 1e-5 * scale * gphi.length() * (eye - xf).length();
             return ok.then_some(xf);
         }
+        prev = len;
         x -= step;
         if (x - x0.as_dvec3()).length() > reach as f64 {
             return None;
