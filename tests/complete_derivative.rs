@@ -140,6 +140,14 @@ fn grid() {
                 l2: 0.23,
                 sum: 0.23,
             },
+            Check {
+                // The grid's own shape parameter: its iso-level (a uniform dilation).
+                name: "baked_blob.sdf.child.level",
+                h: 0.01,
+                // L2 (0.131, 0.127), sums ≤ 0.054; interior alone 0.71. FD h/2 0.071, noise 0.105.
+                l2: 0.27,
+                sum: 0.11,
+            },
         ],
         budget,
         3,

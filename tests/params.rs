@@ -144,17 +144,20 @@ fn issue_names_exist_with_their_values() {
     ] {
         assert_eq!(csg.parameter(name).unwrap(), value, "{name}");
     }
-    // Directions are not parameters; neither are grid samples.
+    // Directions are not parameters.
     assert!(csg.parameter("ring.sdf.child.axis.x").is_err());
     assert!(csg.parameter("key.normal.x").is_err());
     let grid = example("grid");
     assert_eq!(grid.parameter("baked_blob.sdf.translate.x").unwrap(), 1.3);
-    assert!(
-        grid.parameters()
-            .iter()
-            .all(|(n, _)| !n.starts_with("baked_blob.sdf.child")),
-        "grid nodes have no parameters"
-    );
+    // A grid node's one parameter is its iso-level; its samples are not parameters.
+    let child: Vec<String> = grid
+        .parameters()
+        .into_iter()
+        .filter(|(n, _)| n.starts_with("baked_blob.sdf.child"))
+        .map(|(n, _)| n)
+        .collect();
+    assert_eq!(child, names(&["baked_blob.sdf.child.level"]));
+    assert_eq!(grid.parameter("baked_blob.sdf.child.level").unwrap(), 0.0);
 }
 
 #[test]

@@ -605,13 +605,27 @@ fn good_grid_file_loads() {
     );
     let scene = scene::parse(&grid_scene("ball.npy").to_string(), &dir).unwrap();
     match &scene.shapes[0].sdf {
-        Sdf::Grid { data, bbox_min, .. } => {
+        Sdf::Grid {
+            data,
+            bbox_min,
+            level,
+            ..
+        } => {
             assert_eq!(data.dims, [8, 8, 8]);
             assert_eq!(*bbox_min, glam::Vec3::splat(-1.0));
             assert!((data.values[0] - (3f32.sqrt() - 0.5)).abs() < 1e-6);
+            assert_eq!(level.value, 0.0, "level defaults to 0");
         }
         other => panic!("expected a grid, got {other:?}"),
     }
+    // An explicit iso-level; a non-number is an error naming the field.
+    let mut v = grid_scene("ball.npy");
+    v["shapes"][0]["sdf"]["level"] = serde_json::json!(0.25);
+    let scene = scene::parse(&v.to_string(), &dir).unwrap();
+    assert!(matches!(&scene.shapes[0].sdf, Sdf::Grid { level, .. } if level.value == 0.25));
+    v["shapes"][0]["sdf"]["level"] = serde_json::json!("high");
+    let err = scene::parse(&v.to_string(), &dir).unwrap_err().to_string();
+    assert!(err.contains("level"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

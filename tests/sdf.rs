@@ -280,6 +280,14 @@ fn two_spheres_and_capsule() -> Vec<Sdf> {
     ]
 }
 
+/// `grid` with its iso-level set to `level`.
+fn dilated(mut grid: Sdf, level: f32) -> Sdf {
+    if let Sdf::Grid { level: l, .. } = &mut grid {
+        l.value = level;
+    }
+    grid
+}
+
 fn baked_sphere() -> Sdf {
     let (lo, hi) = (Vec3::splat(-1.2), Vec3::splat(1.2));
     let data = bake(&Sdf::sphere(Vec3::new(0.05, -0.1, 0.0), 0.8), lo, hi, 40);
@@ -324,6 +332,8 @@ sdf_suite! {
     ), EXACT;
     // Outside its box a grid is `φ(face) + distance`: a bound, not a distance.
     grid: baked_sphere(), Expect { unit_gradient: Some(0.03), unit_box: Some((Vec3::splat(-1.2), Vec3::splat(1.2))) };
+    // Iso-level 0.5: the surface (radius ≈ 1.3) leaves the grid box (±1.2), so the bounds must grow.
+    grid_dilated: dilated(baked_sphere(), 0.5), Expect { unit_gradient: None, unit_box: None };
 }
 
 // ----- closed forms --------------------------------------------------------------------------------

@@ -536,7 +536,7 @@ impl Context<'_> {
             "union" | "intersection" | "difference" => &["children"],
             "smooth_union" => &["children", "k"],
             "transform" => &["translate", "rotate", "scale", "child"],
-            "grid" => &["file", "bbox_min", "bbox_max"],
+            "grid" => &["file", "bbox_min", "bbox_max", "level"],
             _ => unreachable!("tag checked against SDF_TYPES"),
         };
         let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
@@ -701,6 +701,7 @@ impl Context<'_> {
             data: Arc::new(data),
             bbox_min,
             bbox_max,
+            level: Param::new(o.opt_f32("level")?.unwrap_or(0.0)),
         })
     }
 

@@ -119,7 +119,7 @@ macro_rules! visitors {
                     scalar(prefix, "scale", scale, f);
                     $sdf(child, &format!("{prefix}.child"), f);
                 }
-                Sdf::Grid { .. } => {}
+                Sdf::Grid { level, .. } => scalar(prefix, "level", level, f),
                 Sdf::Named { name, child } => $sdf(child, name, f),
             }
         }

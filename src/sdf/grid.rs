@@ -269,9 +269,10 @@ fn face_min(get: impl Fn(usize, usize) -> f32, n1: usize, n2: usize) -> f32 {
     m
 }
 
-/// Box of a grid node: the grid box, grown by how far below zero the spline gets on its faces (outside,
-/// `φ = φ(face) + distance`, so a negative face value `−m` puts zeros up to `m` beyond the face).
-pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> Aabb {
+/// Box of a grid node of iso-level `level`: the grid box, grown by how far below `level` the spline gets
+/// on its faces (outside, `φ = φ(face) + distance`, so a face value `level − m` puts zeros up to `m`
+/// beyond the face).
+pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
     if !data.usable() {
         return Aabb::EMPTY;
     }
@@ -287,5 +288,5 @@ pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> Aab
         m = m.min(face_min(|x, y| data.at(x, y, z), nx, ny));
     }
     let b = Aabb::new(bmin, bmax);
-    b.expanded((-m).max(0.0) + 1e-6 * b.extent().max_element())
+    b.expanded((level - m).max(0.0) + 1e-6 * b.extent().max_element())
 }

@@ -148,6 +148,9 @@ pub enum Sdf {
         bbox_min: glam::Vec3,
         /// Upper corner of the grid box (last sample).
         bbox_max: glam::Vec3,
+        /// Iso-level: the node is `spline − level`, so a positive level dilates the surface by about
+        /// `level / |∇φ|` and a negative one erodes it (0 keeps the baked surface).
+        level: Param,
     },
     /// A node given a `name` in the scene file, so that its parameters are `<name>.<field>` (see
     /// [`crate::scene::Scene::parameters`]). It is the child in every respect: evaluation, gradient,
@@ -202,7 +205,8 @@ impl Sdf {
                 data,
                 bbox_min,
                 bbox_max,
-            } => grid::eval(data, *bbox_min, *bbox_max, p),
+                level,
+            } => grid::eval(data, *bbox_min, *bbox_max, p) - level.get::<S>(),
             Sdf::Named { child, .. } => child.eval(p),
         }
     }
@@ -331,7 +335,8 @@ impl Sdf {
                 data,
                 bbox_min,
                 bbox_max,
-            } => grid::bounds(data, *bbox_min, *bbox_max),
+                level,
+            } => grid::bounds(data, *bbox_min, *bbox_max, level.value),
             Sdf::Named { child, .. } => child.bounds(),
         }
     }
@@ -353,6 +358,7 @@ impl Sdf {
                 data,
                 bbox_min,
                 bbox_max,
+                ..
             } => grid::lipschitz(data, *bbox_min, *bbox_max),
             Sdf::Named { child, .. } => child.lipschitz(),
             _ => 1.0,
@@ -529,6 +535,7 @@ impl Sdf {
             data: Arc::new(data),
             bbox_min,
             bbox_max,
+            level: Param::new(0.0),
         })
     }
 }
