@@ -79,7 +79,8 @@ enum Command {
         /// Seed of the deterministic sampler.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_secondary.P.R|G|B`).
+        /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_primary.P.R|G|B`,
+        /// `d_secondary.P.R|G|B`; they sum to `d.P`).
         #[arg(long)]
         terms: bool,
         /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it [default: spp/8,
