@@ -3,10 +3,13 @@
 //! common random numbers, in front of a finite background (an emitting wall, whose points are attached)
 //! and in front of the environment, for the light's position and size and the camera.
 
+mod common;
+
+use common::deriv::{self as deriv, gray};
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, Image};
+use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::emitter_edges::EmitterOutlines;
 use implicit_psdr::integrator::derivative::{
     DiffOptions, Normalization, render_derivatives_with_boundary,
@@ -97,40 +100,14 @@ fn sphere_scene() -> Scene {
     Scene::new(camera(), IntegratorKind::Direct, 1, vec![], vec![ball, env])
 }
 
-fn gray(image: &Image) -> Vec<f64> {
-    image
-        .rgb
-        .chunks(3)
-        .map(|c| c.iter().map(|&v| v as f64).sum())
-        .collect()
-}
-
-/// 5×5 box blur (clamped at the border).
+/// 5×5 box blur of a `SIZE × SIZE` plane.
 fn blur(v: &[f64]) -> Vec<f64> {
-    let n = SIZE as i64;
-    let mut out = vec![0.0; v.len()];
-    for y in 0..n {
-        for x in 0..n {
-            let (mut s, mut c) = (0.0, 0.0);
-            for dy in -2..=2 {
-                for dx in -2..=2 {
-                    let (xx, yy) = (x + dx, y + dy);
-                    if xx >= 0 && yy >= 0 && xx < n && yy < n {
-                        s += v[(yy * n + xx) as usize];
-                        c += 1.0;
-                    }
-                }
-            }
-            out[(y * n + x) as usize] = s / c;
-        }
-    }
-    out
+    deriv::blur(v, SIZE as usize, SIZE as usize, 2)
 }
 
+/// Relative L2 error of `a` against `b`.
 fn rel_l2(a: &[f64], b: &[f64]) -> f64 {
-    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
-    let den: f64 = b.iter().map(|y| y * y).sum();
-    (num / den.max(1e-30)).sqrt()
+    deriv::rel_l2(a, b, None)
 }
 
 /// Measured errors of one case.

@@ -2,10 +2,13 @@
 //! secondary) against central finite differences with common random numbers on a scene whose indirect
 //! shadows matter; `max_depth = 1` is the `direct` estimator exactly; finite and deterministic.
 
+mod common;
+
+use common::deriv::{blurred_rel_l2, gray};
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, Image};
+use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
 use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives_with_boundary};
@@ -57,43 +60,10 @@ fn wall_scene(integrator: IntegratorKind) -> Scene {
     Scene::new(camera, integrator, 1, vec![floor, wall, ball], vec![light])
 }
 
-/// Sum of the three channels per pixel.
-fn gray(image: &Image) -> Vec<f64> {
-    image
-        .rgb
-        .chunks(3)
-        .map(|c| c.iter().map(|&v| v as f64).sum())
-        .collect()
-}
-
-/// 5×5 box blur (within the image).
-fn blur(v: &[f64]) -> Vec<f64> {
-    let n = SIZE as i64;
-    let mut out = vec![0.0; v.len()];
-    for y in 0..n {
-        for x in 0..n {
-            let (mut s, mut c) = (0.0, 0.0);
-            for dy in -2..=2 {
-                for dx in -2..=2 {
-                    let (xx, yy) = (x + dx, y + dy);
-                    if xx >= 0 && yy >= 0 && xx < n && yy < n {
-                        s += v[(yy * n + xx) as usize];
-                        c += 1.0;
-                    }
-                }
-            }
-            out[(y * n + x) as usize] = s / c;
-        }
-    }
-    out
-}
-
 /// Relative L2 error of `a` against `b` after a 5×5 blur.
 fn rel_l2(a: &[f64], b: &[f64]) -> f64 {
-    let (a, b) = (blur(a), blur(b));
-    let num: f64 = a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum();
-    let den: f64 = b.iter().map(|y| y * y).sum();
-    (num / den.max(1e-30)).sqrt()
+    let n = SIZE as usize;
+    blurred_rel_l2(a, b, n, n, None)
 }
 
 /// Per pixel: which shape the camera sees at its centre (`None`: an emitter or nothing).

@@ -2,10 +2,13 @@
 //! sphere in a constant environment against the closed form of its radius derivative, interior +
 //! primary against central finite differences, finiteness and determinism across thread counts.
 
+mod common;
+
+use common::deriv::{gray, rel_l2 as rel_l2_masked};
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, Image};
+use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::integrator::derivative::{
     DiffOptions, Normalization, render_derivatives, render_derivatives_with_boundary,
@@ -67,15 +70,6 @@ fn selected(r: f32) -> Scene {
         .select_parameters(&["ball.radius".to_string()])
         .unwrap();
     scene
-}
-
-/// Sum of the three channels per pixel.
-fn gray(image: &Image) -> Vec<f64> {
-    image
-        .rgb
-        .chunks(3)
-        .map(|c| c.iter().map(|&v| v as f64).sum())
-        .collect()
 }
 
 fn tent(x: f64) -> f64 {
@@ -294,9 +288,7 @@ fn backdrop_scene() -> Scene {
 
 /// Relative L2 of `a` against `b`.
 fn rel_l2(a: &[f64], b: &[f64]) -> f64 {
-    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
-    let den: f64 = b.iter().map(|y| y * y).sum();
-    (num / den.max(1e-30)).sqrt()
+    rel_l2_masked(a, b, None)
 }
 
 /// A finite background: interior + primary against finite differences for the ball's position and

@@ -2,10 +2,13 @@
 //! central finite differences with common random numbers on a floor shadow; zero where no shadow
 //! boundary is seen; determinism across thread counts.
 
+mod common;
+
+use common::deriv::{self as deriv, blur, gray, masked_sum};
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, Image};
+use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
 use implicit_psdr::integrator::derivative::Normalization;
 use implicit_psdr::integrator::derivative::{
@@ -84,56 +87,10 @@ fn floor_mask(scene: &Scene) -> Vec<bool> {
     mask
 }
 
-/// Sum of the three channels per pixel.
-fn gray(image: &Image) -> Vec<f64> {
-    image
-        .rgb
-        .chunks(3)
-        .map(|c| c.iter().map(|&v| v as f64).sum())
-        .collect()
-}
-
-/// 3×3 box blur (within the image).
-fn blur(v: &[f64]) -> Vec<f64> {
-    let n = SIZE as i64;
-    let mut out = vec![0.0; v.len()];
-    for y in 0..n {
-        for x in 0..n {
-            let (mut s, mut c) = (0.0, 0.0);
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (xx, yy) = (x + dx, y + dy);
-                    if xx >= 0 && yy >= 0 && xx < n && yy < n {
-                        s += v[(yy * n + xx) as usize];
-                        c += 1.0;
-                    }
-                }
-            }
-            out[(y * n + x) as usize] = s / c;
-        }
-    }
-    out
-}
-
 /// Relative L2 error of `a` against `b` over `mask` after a 3×3 blur.
 fn rel_l2(a: &[f64], b: &[f64], mask: &[bool]) -> f64 {
-    let (a, b) = (blur(a), blur(b));
-    let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..a.len() {
-        if mask[i] {
-            num += (a[i] - b[i]).powi(2);
-            den += b[i].powi(2);
-        }
-    }
-    (num / den.max(1e-30)).sqrt()
-}
-
-fn masked_sum(a: &[f64], mask: &[bool]) -> f64 {
-    a.iter()
-        .zip(mask)
-        .filter(|(_, m)| **m)
-        .map(|(v, _)| v)
-        .sum()
+    let n = SIZE as usize;
+    deriv::rel_l2(&blur(a, n, n, 1), &blur(b, n, n, 1), Some(mask))
 }
 
 fn diff_options(spp: u32, seed: u64) -> DiffOptions {

@@ -5,12 +5,13 @@
 //! complete derivative of an environment-lit scene matches finite differences.
 
 mod common;
+use common::deriv::{self as deriv, gray, masked_sum};
 
 use common::Rng;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, Image};
+use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::secondary::render_secondary_with;
 use implicit_psdr::integrator::boundary::tangent_sampling::{
     Interval, TangentDistribution, TangentSampler, TangentSampling, UNIFORM_SHARE, emitter_interval,
@@ -329,56 +330,14 @@ fn shadow_scene() -> Scene {
     )
 }
 
-/// Sum of the three channels per pixel.
-fn gray(image: &Image) -> Vec<f64> {
-    image
-        .rgb
-        .chunks(3)
-        .map(|c| c.iter().map(|&v| v as f64).sum())
-        .collect()
-}
-
-/// `(2k+1)²` box blur (within the image).
+/// `(2k+1)²` box blur of a `SIZE × SIZE` plane.
 fn blur(v: &[f64], k: i64) -> Vec<f64> {
-    let n = SIZE as i64;
-    let mut out = vec![0.0; v.len()];
-    for y in 0..n {
-        for x in 0..n {
-            let (mut s, mut c) = (0.0, 0.0);
-            for dy in -k..=k {
-                for dx in -k..=k {
-                    let (xx, yy) = (x + dx, y + dy);
-                    if xx >= 0 && yy >= 0 && xx < n && yy < n {
-                        s += v[(yy * n + xx) as usize];
-                        c += 1.0;
-                    }
-                }
-            }
-            out[(y * n + x) as usize] = s / c;
-        }
-    }
-    out
+    deriv::blur(v, SIZE as usize, SIZE as usize, k)
 }
 
 /// Relative L2 error of `a` against `b` over `mask` after a 5×5 blur.
 fn rel_l2(a: &[f64], b: &[f64], mask: &[bool]) -> f64 {
-    let (a, b) = (blur(a, 2), blur(b, 2));
-    let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..a.len() {
-        if mask[i] {
-            num += (a[i] - b[i]).powi(2);
-            den += b[i].powi(2);
-        }
-    }
-    (num / den.max(1e-30)).sqrt()
-}
-
-fn masked_sum(a: &[f64], mask: &[bool]) -> f64 {
-    a.iter()
-        .zip(mask)
-        .filter(|(_, m)| **m)
-        .map(|(v, _)| v)
-        .sum()
+    deriv::rel_l2(&blur(a, 2), &blur(b, 2), Some(mask))
 }
 
 /// Pixels whose whole filter footprint (±1.5 px) sees shape `shape` (or, for `None`, anything).
