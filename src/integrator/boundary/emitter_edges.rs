@@ -59,21 +59,22 @@
 //!
 //! averaged over the `N` samples of its own random stream ([`EDGE_STREAM`]). `x_B` must be visible
 //! from the eye and the background is found as for silhouettes: one camera path (the `direct`
-//! estimator, [`trace_path`]) through the film point `u_B + ε n_img`, `ε` = 1/50 pixel, must not hit
+//! estimator, [`trace_path`](crate::integrator::path::trace_path)) through the film point `u_B + ε n_img`, `ε` = 1/50 pixel, must not hit
 //! anything before `x_B`'s depth (less a margin); its first vertex is `x_D`, its detached contribution
 //! `L_bg`.
 //!
 //! [`super::primary::render_primary_terms`] gives the primary term's samples to the silhouettes and to
 //! the outlines half and half when both exist ([`split_samples`]), all to one when the other is absent.
 
-use super::{Splat, accumulate_samples, finite_splat, on_film, splat_filtered};
+use super::{
+    BACKGROUND_OFFSET_PIXELS, Splat, accumulate_samples, attached_first_vertex, background_offset,
+    background_radiance, finite_splat, on_film, projection_jacobian, splat_filtered,
+};
 use crate::emitter::Emitter;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::derivative::Directions;
-use crate::integrator::path::{
-    PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
-};
+use crate::integrator::path::{PathRecord, TraceCounters, VertexKind};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
 use crate::scalar::Scalar;
@@ -81,9 +82,6 @@ use crate::scene::Scene;
 
 /// The random stream of emitter-outline samples (distinct from the silhouettes' and the camera's).
 pub const EDGE_STREAM: u64 = 0xED6E_0F11;
-
-/// The film offset of the background ray from the outline, in pixels.
-const OFFSET_PIXELS: f32 = 0.02;
 
 /// One piece of an emitter's outline seen from the eye.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -402,14 +400,10 @@ fn sample<S: Directions>(
     };
     let frame = scene.camera.frame::<f32>();
     let eye: glam::Vec3 = frame.origin.into();
-    let (right, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
-        (frame.right.into(), frame.up.into(), frame.forward.into());
-    let focal = frame.focal;
     let x_b = pt.x;
     let q = x_b - eye;
     let dist = q.length();
-    let z = q.dot(fwd);
-    if !(dist > 0.0 && dist.is_finite() && z > 0.0) {
+    if !(dist > 0.0 && dist.is_finite()) {
         return;
     }
     let Some((px, py)) = frame.project(Vec3::constant(x_b)) else {
@@ -420,8 +414,9 @@ fn sample<S: Directions>(
     }
     // P' (2×3) at x_B, the image tangent P'T (its length is dℓ_img/dℓ) and the image of a step off
     // the emitter P'm, which orients n_img.
-    let du = (right * z - fwd * q.dot(right)) * (focal / (z * z));
-    let dv = -(up * z - fwd * q.dot(up)) * (focal / (z * z));
+    let Some((du, dv)) = projection_jacobian(&frame, q) else {
+        return;
+    };
     let image = |a: glam::Vec3| glam::Vec2::new(du.dot(a), dv.dot(a));
     let t_img = image(pt.tangent);
     let len_img = t_img.length();
@@ -438,28 +433,18 @@ fn sample<S: Directions>(
         n_img = -n_img;
     }
     // The background side: the camera ray through u_B + ε n_img, visible up to x_B's depth.
-    let (ux, uy) = (px + OFFSET_PIXELS * n_img.x, py + OFFSET_PIXELS * n_img.y);
-    let ray = frame.generate_ray(glam::Vec2::new(ux, uy));
-    let delta = (OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps);
-    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
-    if occluded(scene, &ray, dist - margin, None, counters) {
+    let off = BACKGROUND_OFFSET_PIXELS;
+    let ray = frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y));
+    let delta = background_offset(scene, dist, frame.focal);
+    let Some(l_bg) = background_radiance(scene, ray, dist, delta, sampler, record, counters) else {
         return;
-    }
-    trace_path(
-        scene,
-        ray,
-        scene.integrator.max_scatter(),
-        sampler,
-        record,
-        counters,
-    );
+    };
     // The ray must have passed the emitter (it starts ε pixels off its outline).
     if let Some(first) = record.vertices.first()
         && first.kind == VertexKind::Emitter(pt.emitter)
     {
         return;
     }
-    let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
     // Eq. (1): the outline point's film velocity relative to the background's.
     let fs = scene.camera.frame::<S>();
     let n_e = match &scene.emitters[pt.emitter].emitter {
@@ -470,16 +455,10 @@ fn sample<S: Directions>(
     else {
         return;
     };
-    let background = match record.vertices.first().map(|v| (v.kind, v.p, v.n)) {
-        Some((VertexKind::Shape(i), p, n)) => {
-            film_velocity(&fs, attach.shape_vertex::<S>(i, p, n).x)
-        }
-        Some((VertexKind::Emitter(e), p, n)) => {
-            film_velocity(&fs, attach.emitter_vertex::<S>(e, p, n).x)
-        }
-        // At infinity (or nothing): the fixed direction projected with the lifted frame.
-        _ => film_velocity(&fs, fs.origin + Vec3::constant(ray.d)),
-    };
+    // At infinity (or nothing): the fixed direction projected with the lifted frame.
+    let x_d = attached_first_vertex::<S>(attach, record)
+        .unwrap_or_else(|| fs.origin + Vec3::constant(ray.d));
+    let background = film_velocity(&fs, x_d);
     let Some((bx, by)) = background else {
         return;
     };

@@ -22,11 +22,17 @@ pub use segment::{
     primary_measure_change, silhouette_tangent,
 };
 
+use crate::camera::CameraFrame;
 use crate::error::{Error, Result};
 use crate::film::Image;
-use crate::integrator::attach::window_slots;
+use crate::integrator::attach::{SceneAttach, window_slots};
 use crate::integrator::derivative::Directions;
-use crate::math::Vec3;
+use crate::integrator::path::{
+    PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
+};
+use crate::math::{Ray, Vec3};
+use crate::sampler::Sampler;
+use crate::scalar::Scalar;
 use crate::scene::Scene;
 use rayon::prelude::*;
 
@@ -178,4 +184,67 @@ pub(crate) fn splat_filtered<S: Directions>(
             }
         }
     }
+}
+
+/// How far outside an edge its background is looked up, in pixels (the primary term's background side).
+pub(crate) const BACKGROUND_OFFSET_PIXELS: f32 = 0.02;
+
+/// The world-space length of [`BACKGROUND_OFFSET_PIXELS`] at distance `dist` from the eye (`focal` in
+/// pixels), at least `4 eps` so the offset ray clears the edge's own surface.
+pub(crate) fn background_offset(scene: &Scene, dist: f32, focal: f32) -> f32 {
+    (BACKGROUND_OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps)
+}
+
+/// The rows `(∂u/∂x, ∂v/∂x)` of the film projection's 2×3 Jacobian at `x_B = eye + q` (`None` behind
+/// the camera): `P'_u = f (r z − f̂ (q·r)) / z²`, `P'_v = −f (up z − f̂ (q·up)) / z²`, `z = q·f̂`.
+pub(crate) fn projection_jacobian(
+    frame: &CameraFrame<f32>,
+    q: glam::Vec3,
+) -> Option<(glam::Vec3, glam::Vec3)> {
+    let (right, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
+        (frame.right.into(), frame.up.into(), frame.forward.into());
+    let z = q.dot(fwd);
+    if z.is_nan() || z <= 0.0 {
+        return None;
+    }
+    let k = frame.focal / (z * z);
+    Some((
+        (right * z - fwd * q.dot(right)) * k,
+        -(up * z - fwd * q.dot(up)) * k,
+    ))
+}
+
+/// The background radiance beyond an edge at distance `dist` from the eye, seen along the camera `ray`
+/// just outside it (`delta` from [`background_offset`]): `None` when something nearer hides the edge;
+/// else one camera path of the scene's own estimator, left in `record` (its first vertex is `x_D`), and
+/// its detached radiance.
+pub(crate) fn background_radiance(
+    scene: &Scene,
+    ray: Ray,
+    dist: f32,
+    delta: f32,
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) -> Option<glam::Vec3> {
+    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
+    if occluded(scene, &ray, dist - margin, None, counters) {
+        return None;
+    }
+    let depth = scene.integrator.max_scatter();
+    trace_path(scene, ray, depth, sampler, record, counters);
+    Some(contribution::<f32>(scene, record, detached).into())
+}
+
+/// The attached position of a camera path's first vertex (`x_D` of the primary term), `None` for a
+/// direction at infinity or an empty path.
+pub(crate) fn attached_first_vertex<S: Scalar>(
+    attach: &SceneAttach,
+    record: &PathRecord,
+) -> Option<Vec3<S>> {
+    record.vertices.first().and_then(|v| match v.kind {
+        VertexKind::Shape(i) => Some(attach.shape_vertex::<S>(i, v.p, v.n).x),
+        VertexKind::Emitter(e) => Some(attach.emitter_vertex::<S>(e, v.p, v.n).x),
+        VertexKind::Environment(_) => None,
+    })
 }

@@ -82,7 +82,7 @@
 //!
 //! # The background radiance
 //!
-//! A detached `f32` estimate (its derivative is second order in (1)): one camera path ([`trace_path`]
+//! A detached `f32` estimate (its derivative is second order in (1)): one camera path ([`trace_path`](crate::integrator::path::trace_path)
 //! with the scene's `max_scatter`: the integrator's own estimator) along the ray from `c` towards
 //! `x_B + δ n_B`, `δ` = 1/50 of a pixel at `x_B`'s distance (at least `4 eps`); its first vertex is
 //! `x_D`. `x_B` must be visible: that ray must not hit anything before `x_B`'s depth (less a margin),
@@ -104,15 +104,14 @@
 use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
 use super::{
-    Splat, accumulate_samples, check_supported, finite_splat, in_windows, on_film, splat_filtered,
+    Splat, accumulate_samples, attached_first_vertex, background_offset, background_radiance,
+    check_supported, finite_splat, in_windows, on_film, projection_jacobian, splat_filtered,
 };
 use crate::error::Result;
 use crate::film::Image;
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::derivative::{DiffOptions, Directions, Normalization, dispatch_directions};
-use crate::integrator::path::{
-    PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
-};
+use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::silhouette_curve::{
     CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
 };
@@ -312,12 +311,9 @@ fn sample<S: Directions>(
         return;
     };
     // Image tangent t = P'T and its length (the measure change dℓ_img/dℓ).
-    let z = q.dot(fwd);
-    if z <= 0.0 {
+    let Some((du, dv)) = projection_jacobian(&frame, q) else {
         return;
-    }
-    let du = (right * z - fwd * q.dot(right)) * (focal / (z * z));
-    let dv = -(up * z - fwd * q.dot(up)) * (focal / (z * z));
+    };
     let t_img = glam::Vec2::new(du.dot(cs.tangent), dv.dot(cs.tangent));
     let len_img = t_img.length();
     if !(len_img > 0.0 && len_img.is_finite()) {
@@ -339,32 +335,18 @@ fn sample<S: Directions>(
         return;
     }
     // The background side: x_D and its radiance, along the ray just outside the silhouette.
-    let delta = (0.02 * dist / focal).max(4.0 * scene.trace.eps);
+    let delta = background_offset(scene, dist, focal);
     let Some(d_out) = (x_b + n_b * delta - eye).try_normalize() else {
         return;
     };
-    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
-    if occluded(scene, &Ray::new(eye, d_out), dist - margin, None, counters) {
+    let ray = Ray::new(eye, d_out);
+    let Some(l_bg) = background_radiance(scene, ray, dist, delta, sampler, record, counters) else {
         return;
-    }
-    trace_path(
-        scene,
-        Ray::new(eye, d_out),
-        scene.integrator.max_scatter(),
-        sampler,
-        record,
-        counters,
-    );
-    let l_bg: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
+    };
     // v = −∂πh / rate, relative to the background's own parametrisation (module docs): the ray from the
     // moving eye towards the attached x_D, or along the fixed direction for a background at infinity.
     let fs = scene.camera.frame::<S>();
-    let x_d = record.vertices.first().and_then(|v| match v.kind {
-        VertexKind::Shape(i) => Some(attach.shape_vertex::<S>(i, v.p, v.n).x),
-        VertexKind::Emitter(e) => Some(attach.emitter_vertex::<S>(e, v.p, v.n).x),
-        VertexKind::Environment(_) => None,
-    });
-    let d_s = match x_d {
+    let d_s = match attached_first_vertex::<S>(attach, record) {
         Some(x_d) => x_d - fs.origin,
         None => Vec3::constant(d_hat),
     }
