@@ -2,7 +2,7 @@
 //! (`scenes/sphere_floor.json`, 64×64, direct), measured in one run:
 //!
 //! 1. **Cost**: complete-derivative time / primal time at the same spp (the scene's 64) with `diff`'s
-//!    default boundary budgets (`default_boundary_spp`: 2 silhouette and 8 shadow samples per pixel at
+//!    default boundary budgets (`BoundaryBudget`: 2 silhouette and 8 shadow samples per pixel at
 //!    64 spp), one parameter; also with 4× those budgets. Goal ≤ 3.
 //! 2. **Time to 5% error**, this estimator against central finite differences (common random numbers,
 //!    `h = 0.01`), for `ball.radius`, `ball.center.x` and `light.center.x`: each method's budget is doubled
@@ -16,10 +16,10 @@
 
 use implicit_psdr::compare::{box_blur, relative_l2};
 use implicit_psdr::film::Image;
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, default_boundary_spp, render_derivatives, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{
+    BoundaryBudget, DiffOptions, render_derivatives_with_boundary, render_interior,
+};
 use implicit_psdr::integrator::{RenderOptions, render};
 use implicit_psdr::scene::{Scene, load};
 use std::hint::black_box;
@@ -48,7 +48,7 @@ fn options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         ..DiffOptions::default()
     }
@@ -76,7 +76,7 @@ fn blurred_error(a: &Image, reference: &Image) -> f64 {
 /// The complete derivative with `spp` camera samples and `boost` times `diff`'s default boundary budgets.
 fn complete(scene: &Scene, spp: u32, seed: u64, boost: u64) -> Image {
     let pixels = (scene.camera.width * scene.camera.height) as u64;
-    let (p, s) = default_boundary_spp(spp);
+    let (p, s) = BoundaryBudget::default().resolve(spp);
     let (primary, secondary) = (boost * p as u64 * pixels, boost * s as u64 * pixels);
     let out = render_derivatives_with_boundary(scene, 1, &options(spp, seed), primary, secondary)
         .expect("the default scene supports every term");
@@ -122,7 +122,7 @@ fn main() {
         black_box(render(&plain, &render_options));
         tp.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_derivatives(&one, 1, &options(spp, 0)).unwrap());
+        black_box(render_interior(&one, 1, &options(spp, 0)).unwrap());
         ti.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
         black_box(complete(&one, spp, 0, 1));
@@ -139,7 +139,7 @@ fn main() {
         i * 1e3,
         i / p
     );
-    let (bp, bs) = default_boundary_spp(spp);
+    let (bp, bs) = BoundaryBudget::default().resolve(spp);
     println!(
         "  complete ({bp}+{bs} boundary samples per pixel) {:8.1} ms  ratio {:.2} (goal <= 3)",
         c * 1e3,
@@ -161,7 +161,7 @@ fn main() {
         let fd_options = |spp: u32, seed: u64| RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         };
         let reference = finite_difference(&plain, name, H, &fd_options(REF_SPP, 1000)).unwrap();
         let second = finite_difference(&plain, name, H, &fd_options(REF_SPP, 2000)).unwrap();

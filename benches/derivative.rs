@@ -6,7 +6,7 @@
 //! `cargo bench --bench derivative [-- REPS]`.
 
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::integrator::derivative::{DiffOptions, Normalization, render_derivatives};
+use implicit_psdr::integrator::{DiffOptions, Normalization, render_interior};
 use implicit_psdr::integrator::{RenderOptions, render};
 use implicit_psdr::scene::{Scene, load};
 use implicit_psdr::sdf::Sdf;
@@ -58,11 +58,12 @@ fn main() {
     let render_options = RenderOptions {
         spp,
         seed: 0,
-        progress: false,
+        progress: Default::default(),
     };
     let options = DiffOptions {
         render: render_options.clone(),
         normalization: Normalization::Fixed,
+        ..Default::default()
     };
     let plain = default_scene();
     let mut one = default_scene();
@@ -77,17 +78,17 @@ fn main() {
         black_box(render(&plain, &render_options));
         tp.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_derivatives(&one, 1, &options).unwrap());
+        black_box(render_interior(&one, 1, &options).unwrap());
         t1.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_derivatives(&eight, 8, &options).unwrap());
+        black_box(render_interior(&eight, 8, &options).unwrap());
         t8.push(t.elapsed().as_secs_f64());
         let o = DiffOptions {
             normalization: Normalization::Differentiable,
             ..options.clone()
         };
         let t = Instant::now();
-        black_box(render_derivatives(&eight, 8, &o).unwrap());
+        black_box(render_interior(&eight, 8, &o).unwrap());
         t8d.push(t.elapsed().as_secs_f64());
     }
     let (p, d1, d8, d8d) = (median(tp), median(t1), median(t8), median(t8d));

@@ -21,7 +21,7 @@ fn primal(c: &mut Criterion) {
     let options = RenderOptions {
         spp,
         seed: 0,
-        progress: false,
+        progress: Default::default(),
     };
     let mut group = c.benchmark_group("primal_64x64");
     group.throughput(Throughput::Elements(spp as u64 * 64 * 64));

@@ -58,7 +58,7 @@ fn main() -> implicit_psdr::Result<()> {
         &RenderOptions {
             spp: 64,
             seed: 0,
-            progress: false,
+            progress: Default::default(),
         },
     );
     println!("{} samples in {:.2} s", stats.samples, stats.seconds);

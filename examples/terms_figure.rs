@@ -8,10 +8,8 @@
 use implicit_psdr::film::colormap::{derivative_panel, diverging, side_by_side, srgb_decode};
 use implicit_psdr::film::{Image, write_png};
 use implicit_psdr::integrator::RenderOptions;
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, default_boundary_spp, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{BoundaryBudget, DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::scene::load;
 use std::path::Path;
 
@@ -49,12 +47,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         render: RenderOptions {
             spp,
             seed: 1,
-            progress: false,
+            progress: Default::default(),
         },
         ..DiffOptions::default()
     };
     // Four times `diff`'s default boundary budgets: the figure should show each term clearly.
-    let (bp, bs) = default_boundary_spp(spp);
+    let (bp, bs) = BoundaryBudget::default().resolve(spp);
     let d = render_derivatives_with_boundary(
         &scene,
         1,
@@ -74,7 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &RenderOptions {
             spp: 8 * spp,
             seed: 2,
-            progress: false,
+            progress: Default::default(),
         },
     )?;
     let (_, scale) = derivative_panel(&fd);

@@ -111,7 +111,7 @@ fn check_convex_in_environment(integrator: IntegratorKind) {
         &RenderOptions {
             spp: 128,
             seed: 3,
-            progress: false,
+            progress: Default::default(),
         },
     );
     assert_eq!(stats.samples, 128 * 32 * 32);
@@ -401,7 +401,7 @@ fn check_floor_under_rectangle_light(box_floor: bool) {
         &RenderOptions {
             spp: 256,
             seed: 5,
-            progress: false,
+            progress: Default::default(),
         },
     );
     let (mut worst, mut signed) = (0.0f64, 0.0f64);
@@ -447,7 +447,7 @@ fn white_furnace_path() {
         &RenderOptions {
             spp: 256,
             seed: 11,
-            progress: false,
+            progress: Default::default(),
         },
     );
     assert_eq!(stats.invalid_samples, 0);
@@ -466,7 +466,7 @@ fn path_depth_one_equals_direct() {
     let options = RenderOptions {
         spp: 4,
         seed: 2,
-        progress: false,
+        progress: Default::default(),
     };
     let (a, _) = render(&default_scene(IntegratorKind::Direct, 16, 16), &options);
     let (b, _) = render(
@@ -489,7 +489,7 @@ fn default_scene_box_floor_is_lit() {
     let options = RenderOptions {
         spp: 4,
         seed: 2,
-        progress: false,
+        progress: Default::default(),
     };
     let (a, _) = render(
         &default_scene_with(IntegratorKind::Direct, 16, 16, true),
@@ -513,7 +513,7 @@ fn same_seed_same_image_for_any_thread_count() {
     let options = RenderOptions {
         spp: 3,
         seed: 9,
-        progress: false,
+        progress: Default::default(),
     };
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()

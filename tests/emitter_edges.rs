@@ -11,10 +11,8 @@ use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::emitter_edges::EmitterOutlines;
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, Normalization, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{DiffOptions, Normalization, render_derivatives_with_boundary};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
 use implicit_psdr::sdf::Sdf;
@@ -130,13 +128,14 @@ fn compare(base: &Scene, name: &str, h: f32, spp: u32, fixed: bool) -> Errors {
         render: RenderOptions {
             spp,
             seed: 5,
-            progress: false,
+            progress: Default::default(),
         },
         normalization: if fixed {
             Normalization::Fixed
         } else {
             Normalization::Differentiable
         },
+        ..Default::default()
     };
     let out = render_derivatives_with_boundary(&scene, 1, &opts, 100_000, 0).unwrap();
     let total = gray(&out.total()[0]);
@@ -152,7 +151,7 @@ fn compare(base: &Scene, name: &str, h: f32, spp: u32, fixed: bool) -> Errors {
             &RenderOptions {
                 spp: 1024,
                 seed: 11,
-                progress: false,
+                progress: Default::default(),
             },
         )
         .unwrap(),
@@ -317,9 +316,10 @@ fn outline_term_is_deterministic() {
         render: RenderOptions {
             spp: 1,
             seed: 3,
-            progress: false,
+            progress: Default::default(),
         },
         normalization: Normalization::Differentiable,
+        ..Default::default()
     };
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()

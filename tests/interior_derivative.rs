@@ -9,9 +9,7 @@ use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::{Filter, Image};
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, Normalization, render_derivatives, render_derivatives_in,
-};
+use implicit_psdr::integrator::{DiffOptions, Normalization, render_interior, render_interior_in};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions, render};
 use implicit_psdr::scalar::{Dual32, DualN};
 use implicit_psdr::scene::{Intersection, NamedEmitter, Scene, Shape, Surface};
@@ -134,9 +132,10 @@ fn options(spp: u32, seed: u64, normalization: Normalization) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         normalization,
+        ..Default::default()
     }
 }
 
@@ -145,7 +144,7 @@ fn finite_difference(build: &dyn Fn(f32) -> Scene, value: f32, h: f32, spp: u32)
     let o = RenderOptions {
         spp,
         seed: 7,
-        progress: false,
+        progress: Default::default(),
     };
     let (plus, _) = render(&build(value + h), &o);
     let (minus, _) = render(&build(value - h), &o);
@@ -253,8 +252,8 @@ fn fd_error(
 ) -> (f64, f64, usize) {
     let scene = build(value, true);
     let mask = silhouette_mask(&scene);
-    let d = render_derivatives(&scene, 1, &options(spp_d, 1, normalization)).unwrap();
-    let d2 = render_derivatives(&scene, 1, &options(spp_d, 2, normalization)).unwrap();
+    let d = render_interior(&scene, 1, &options(spp_d, 1, normalization)).unwrap();
+    let d2 = render_interior(&scene, 1, &options(spp_d, 2, normalization)).unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_finite(&d.interior, "fd_error");
     let fd = finite_difference(&|v| build(v, false), value, h, spp_fd);
@@ -282,14 +281,14 @@ fn image_channel_is_the_render() {
         let o = options(spp, 3, Normalization::Fixed);
         let (image, stats) = render(&scene, &o.render);
         for count in [0, 1, 3] {
-            let d = render_derivatives(&scene, count, &o).unwrap();
+            let d = render_interior(&scene, count, &o).unwrap();
             assert_eq!(d.image, image, "count {count}, spp {spp}");
             assert_eq!(d.interior.len(), count);
             assert_eq!(d.stats.samples, stats.samples);
             assert_eq!(d.stats.exhausted_rays, stats.exhausted_rays);
         }
         let o = options(spp, 3, Normalization::Differentiable);
-        assert_eq!(render_derivatives(&scene, 3, &o).unwrap().image, image);
+        assert_eq!(render_interior(&scene, 3, &o).unwrap().image, image);
     }
     // The floor scene under the path integrator (several bounces) too.
     let floor = floor_scene(
@@ -300,7 +299,7 @@ fn image_channel_is_the_render() {
     );
     let o = options(3, 5, Normalization::Fixed);
     assert_eq!(
-        render_derivatives(&floor, 1, &o).unwrap().image,
+        render_interior(&floor, 1, &o).unwrap().image,
         render(&floor, &o.render).0
     );
 }
@@ -317,8 +316,8 @@ fn dual32_and_dual8_agree() {
     let Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf;
     albedo.c[1].slot = Some(3);
     let o = options(4, 11, Normalization::Fixed);
-    let one = render_derivatives_in::<Dual32>(&scene, 4, &o).unwrap();
-    let eight = render_derivatives_in::<DualN<8>>(&scene, 4, &o).unwrap();
+    let one = render_interior_in::<Dual32>(&scene, 4, &o).unwrap();
+    let eight = render_interior_in::<DualN<8>>(&scene, 4, &o).unwrap();
     // num-dual's primal rounding may differ from f32's in the last bit; `DualN` is exact (tested above).
     for (a, b) in one.image.rgb.iter().zip(&eight.image.rgb) {
         assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "image {a} vs {b}");
@@ -357,7 +356,7 @@ fn deterministic_across_thread_counts() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_derivatives(&scene, 2, &o).unwrap())
+            .install(|| render_interior(&scene, 2, &o).unwrap())
     };
     let a = run(1);
     let b = run(3);
@@ -374,7 +373,7 @@ fn linear_parameters_are_exact() {
     for (which, value) in [(SphereParam::AlbedoR, 0.7), (SphereParam::RadianceR, 20.0)] {
         let scene = sphere_scene(which, value, true);
         for normalization in [Normalization::Fixed, Normalization::Differentiable] {
-            let d = render_derivatives(&scene, 1, &options(4, 5, normalization)).unwrap();
+            let d = render_interior(&scene, 1, &options(4, 5, normalization)).unwrap();
             let scale = d.image.rgb.iter().fold(0.0f32, |m, v| m.max(v.abs())) / value;
             let mut lit = 0;
             for p in 0..(SIZE * SIZE) as usize {
@@ -397,7 +396,7 @@ fn linear_parameters_are_exact() {
 fn box_filter_is_refused() {
     let mut scene = sphere_scene(SphereParam::Radius, 1.0, true);
     scene.camera.filter = Filter::Box;
-    let err = render_derivatives(&scene, 1, &options(1, 0, Normalization::Fixed)).unwrap_err();
+    let err = render_interior(&scene, 1, &options(1, 0, Normalization::Fixed)).unwrap_err();
     assert!(err.to_string().contains("box filter"), "{err}");
 }
 
@@ -537,7 +536,7 @@ fn no_nan_at_grazing_angles() {
     if let Emitter::Rectangle { center, .. } = &mut graze.emitters[0].emitter {
         center.c[2].slot = Some(3);
     }
-    let d = render_derivatives(&graze, 4, &options(8, 1, Normalization::Differentiable)).unwrap();
+    let d = render_interior(&graze, 4, &options(8, 1, Normalization::Differentiable)).unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_eq!(d.stats.invalid_samples, 0);
     assert_finite(&d.interior, "grazing floor");
@@ -548,7 +547,7 @@ fn no_nan_at_grazing_angles() {
         center.c[0].slot = Some(1);
     }
     limb.shapes[0].translate.c[2].slot = Some(2);
-    let d = render_derivatives(&limb, 3, &options(16, 1, Normalization::Fixed)).unwrap();
+    let d = render_interior(&limb, 3, &options(16, 1, Normalization::Fixed)).unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_finite(&d.interior, "sphere limb");
 }

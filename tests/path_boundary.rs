@@ -11,8 +11,8 @@ use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
-use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, NamedEmitter, Scene, Shape, Surface};
@@ -97,7 +97,7 @@ fn options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         ..DiffOptions::default()
     }
@@ -127,7 +127,7 @@ fn terms(name: &str, h: f32, seed: u64, fd_seed: u64) -> [Vec<f64>; 4] {
         &RenderOptions {
             spp: 384,
             seed: fd_seed,
-            progress: false,
+            progress: Default::default(),
         },
     )
     .unwrap();

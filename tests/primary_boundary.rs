@@ -10,10 +10,10 @@ use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::boundary::primary::render_primary;
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, Normalization, render_derivatives, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{
+    DiffOptions, Normalization, render_derivatives_with_boundary, render_interior,
+};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
 use implicit_psdr::sdf::Sdf;
@@ -57,10 +57,11 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         // The terms are computed separately here: `render_primary` is the `fixed` normalisation's.
         normalization: Normalization::Fixed,
+        ..Default::default()
     }
 }
 
@@ -166,7 +167,7 @@ fn ball_radius_matches_closed_form() {
 fn interior_plus_primary_matches_finite_differences() {
     let scene = selected(1.0);
     let opts = diff_options(512, 5);
-    let interior = gray(&render_derivatives(&scene, 1, &opts).unwrap().interior[0]);
+    let interior = gray(&render_interior(&scene, 1, &opts).unwrap().interior[0]);
     let primary = gray(&render_primary(&scene, 1, &opts, 200_000).unwrap()[0]);
     let fd = gray(
         &finite_difference(
@@ -176,7 +177,7 @@ fn interior_plus_primary_matches_finite_differences() {
             &RenderOptions {
                 spp: 256,
                 seed: 11,
-                progress: false,
+                progress: Default::default(),
             },
         )
         .unwrap(),
@@ -310,7 +311,7 @@ fn finite_background_matches_finite_differences() {
             128
         };
         let opts = diff_options(spp, 5);
-        let interior = gray(&render_derivatives(&scene, 1, &opts).unwrap().interior[0]);
+        let interior = gray(&render_interior(&scene, 1, &opts).unwrap().interior[0]);
         let primary = gray(&render_primary(&scene, 1, &opts, 200_000).unwrap()[0]);
         let fd = gray(
             &finite_difference(
@@ -320,7 +321,7 @@ fn finite_background_matches_finite_differences() {
                 &RenderOptions {
                     spp: 256,
                     seed: 11,
-                    progress: false,
+                    progress: Default::default(),
                 },
             )
             .unwrap(),

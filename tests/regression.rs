@@ -15,9 +15,17 @@ use std::path::{Path, PathBuf};
 
 /// `(case name, arguments after the scene path)`; each case writes `out.exr` in its own folder.
 const CASES: &[(&str, &str, &[&str])] = &[
-    ("render_sphere_floor", "sphere_floor.json", &["render", "--spp", "4"]),
+    (
+        "render_sphere_floor",
+        "sphere_floor.json",
+        &["render", "--spp", "4"],
+    ),
     ("render_csg", "csg.json", &["render", "--spp", "2"]),
-    ("render_environment", "environment.json", &["render", "--spp", "4"]),
+    (
+        "render_environment",
+        "environment.json",
+        &["render", "--spp", "4"],
+    ),
     ("render_grid", "grid.json", &["render", "--spp", "2"]),
     (
         "diff_sphere_floor",
@@ -148,7 +156,10 @@ fn outputs_are_unchanged_bit_for_bit() {
             "{name}: {}",
             String::from_utf8_lossy(&result.stderr)
         );
-        computed.insert(name.to_string(), format!("{:016x}", hash_exr(&dir.join(&out))));
+        computed.insert(
+            name.to_string(),
+            format!("{:016x}", hash_exr(&dir.join(&out))),
+        );
     }
     if std::env::var_os("REGRESSION_BLESS").is_some() {
         let mut text = String::from(

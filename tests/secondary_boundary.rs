@@ -9,12 +9,10 @@ use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
+use implicit_psdr::integrator::Normalization;
 use implicit_psdr::integrator::boundary::secondary::render_secondary;
-use implicit_psdr::integrator::derivative::Normalization;
-use implicit_psdr::integrator::derivative::{
-    DiffOptions, render_derivatives, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{DiffOptions, render_derivatives_with_boundary, render_interior};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, NamedEmitter, Scene, Shape, Surface};
@@ -98,11 +96,12 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         // Terms are compared without the primary term: with `fixed` normalisation the interior needs
         // no share of it.
         normalization: Normalization::Fixed,
+        ..Default::default()
     }
 }
 
@@ -112,7 +111,7 @@ fn terms(name: &str, h: f32, spp: u32, boundary: u64, fd_spp: u32) -> [Vec<f64>;
     scene.select_parameters(&[name.to_string()]).unwrap();
     let opts = diff_options(spp, 7);
     let out = render_derivatives_with_boundary(&scene, 1, &opts, 0, boundary).unwrap();
-    let plain = render_derivatives(&scene, 1, &opts).unwrap();
+    let plain = render_interior(&scene, 1, &opts).unwrap();
     assert_eq!(out.interior, plain.interior);
     assert!(plain.secondary.is_empty());
     assert_eq!(
@@ -131,7 +130,7 @@ fn terms(name: &str, h: f32, spp: u32, boundary: u64, fd_spp: u32) -> [Vec<f64>;
         &RenderOptions {
             spp: fd_spp,
             seed: 11,
-            progress: false,
+            progress: Default::default(),
         },
     )
     .unwrap();
@@ -221,7 +220,7 @@ fn lone_sphere_has_no_secondary_term() {
             .select_parameters(&["ball.radius".into(), "ball.center.x".into()])
             .unwrap();
         let out = render_secondary(&scene, 2, &diff_options(1, 3), 50_000).unwrap();
-        let plain = render_derivatives(&scene, 2, &diff_options(2, 3)).unwrap();
+        let plain = render_interior(&scene, 2, &diff_options(2, 3)).unwrap();
         assert!(plain.secondary.is_empty());
         assert_eq!(plain.total(), plain.interior);
         let with =

@@ -16,8 +16,8 @@ use implicit_psdr::integrator::boundary::secondary::render_secondary_with;
 use implicit_psdr::integrator::boundary::tangent_sampling::{
     Interval, TangentDistribution, TangentSampler, TangentSampling, UNIFORM_SHARE, emitter_interval,
 };
-use implicit_psdr::integrator::derivative::{DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
 use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, NamedEmitter, Scene, Shape, Surface};
@@ -297,7 +297,7 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         ..DiffOptions::default()
     }
@@ -573,7 +573,7 @@ fn environment_lit_complete_derivative_matches_finite_differences() {
             &RenderOptions {
                 spp: 128,
                 seed: 9 + seed,
-                progress: false,
+                progress: Default::default(),
             },
         )
         .unwrap();

@@ -116,6 +116,19 @@ pub fn side_by_side(panels: &[Image]) -> Image {
     out
 }
 
+/// The picture of a derivative command: the image beside one colour-mapped panel per derivative
+/// ([`derivative_panel`]), with each panel's colour scale.
+pub fn derivative_picture(image: &Image, derivatives: &[&Image]) -> (Image, Vec<f32>) {
+    let mut panels = vec![image.clone()];
+    let mut scales = Vec::new();
+    for d in derivatives {
+        let (panel, scale) = derivative_panel(d);
+        panels.push(panel);
+        scales.push(scale);
+    }
+    (side_by_side(&panels), scales)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

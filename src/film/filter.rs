@@ -144,6 +144,40 @@ impl Gauss {
     }
 }
 
+/// The pixels whose filter covers a film point: [`Filter::footprint`].
+#[derive(Clone, Debug)]
+pub struct Footprint {
+    p: glam::Vec2,
+    r: f32,
+    x_lo: i64,
+    x_hi: i64,
+    x: i64,
+    y: i64,
+    y_hi: i64,
+}
+
+impl Iterator for Footprint {
+    type Item = (u32, u32);
+
+    #[inline]
+    fn next(&mut self) -> Option<(u32, u32)> {
+        while self.y <= self.y_hi {
+            if (self.p.y - (self.y as f32 + 0.5)).abs() < self.r {
+                while self.x <= self.x_hi {
+                    let x = self.x;
+                    self.x += 1;
+                    if (self.p.x - (x as f32 + 0.5)).abs() < self.r {
+                        return Some((x as u32, self.y as u32));
+                    }
+                }
+            }
+            self.y += 1;
+            self.x = self.x_lo;
+        }
+        None
+    }
+}
+
 /// Tent inverse CDF on one axis: `F(x) = (1 + x)²/2` on `[−1, 0]`, `1 − (1 − x)²/2` on `[0, 1]`.
 #[inline]
 fn tent_sample(u: f32) -> f32 {
@@ -168,6 +202,26 @@ impl Filter {
     /// (DESIGN §3: derivatives through a discontinuous filter need them).
     pub fn is_continuous(&self) -> bool {
         !matches!(self, Filter::Box)
+    }
+
+    /// The pixels `(x, y)` of a `width × height` image whose filter support holds film point `p`
+    /// (pixels from the top-left corner): `|p − centre| < radius` on both axes, row by row. Empty for
+    /// a non-finite point.
+    pub fn footprint(&self, p: glam::Vec2, width: u32, height: u32) -> Footprint {
+        let r = self.radius();
+        // Centres i + 0.5 in (v − r, v + r); the bounds are widened by one and the test is exact.
+        let lo = |v: f32| ((v - r - 0.5).floor() as i64).max(0);
+        let hi = |v: f32, n: u32| ((v + r - 0.5).ceil() as i64).min(n as i64 - 1);
+        let finite = p.is_finite();
+        Footprint {
+            p,
+            r,
+            x_lo: lo(p.x),
+            x_hi: if finite { hi(p.x, width) } else { -1 },
+            x: lo(p.x),
+            y: lo(p.y),
+            y_hi: if finite { hi(p.y, height) } else { -1 },
+        }
     }
 
     /// A film offset from the pixel centre, distributed exactly as the filter, from `u ∈ [0,1)²`.

@@ -1,11 +1,15 @@
 //! Pixel filters, images and their output (EXR, PNG).
 
+pub mod accumulate;
 pub mod colormap;
 mod filter;
 mod output;
 
-pub use filter::Filter;
-pub use output::{Channels, read_exr, srgb_encode, write_exr, write_png};
+pub use accumulate::{Film, Normalization, PixelFilm, SampleSink, SplatFilm, splat_filtered};
+pub use filter::{Filter, Footprint};
+pub use output::{
+    Channels, check_output_path, read_exr, srgb_encode, write_exr, write_exr_and_png, write_png,
+};
 
 /// A linear-RGB image, row-major from the top row, three `f32` per pixel.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +35,14 @@ impl Image {
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
         let i = 3 * (y * self.width + x) as usize;
         [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+    }
+    /// The EXR channels `{prefix}R`, `{prefix}G`, `{prefix}B` of the image.
+    pub fn rgb_channels(&self, prefix: &str) -> Channels {
+        ["R", "G", "B"]
+            .iter()
+            .enumerate()
+            .map(|(c, name)| (format!("{prefix}{name}"), self.channel(c)))
+            .collect()
     }
     /// One channel (0 = R, 1 = G, 2 = B) as a plane of `width · height` values.
     pub fn channel(&self, c: usize) -> Vec<f32> {

@@ -148,3 +148,46 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<()
         writer.finish().map_err(|e| err(&e))
     })
 }
+
+/// Checks, before anything is rendered, that `path` can be an output file: its folder exists, it is
+/// not a folder, and it ends in `.extension` (case-insensitive). `what` names it in the error
+/// (e.g. `--out`).
+pub fn check_output_path(path: &Path, what: &str, extension: &str) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let problem = if !dir.is_dir() {
+        format!("folder {} does not exist", dir.display())
+    } else if path.is_dir() {
+        "is a folder".to_string()
+    } else if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case(extension))
+    {
+        format!("must end in .{extension}")
+    } else {
+        return Ok(());
+    };
+    Err(Error::Unsupported(format!(
+        "{what} {}: {problem}",
+        path.display()
+    )))
+}
+
+/// Writes `channels` (planes of `width × height`) to the EXR `exr`, then `picture` to the PNG `png`;
+/// removes the EXR if the PNG fails, so the pair is written all or nothing.
+pub fn write_exr_and_png(
+    exr: &Path,
+    png: &Path,
+    (width, height): (u32, u32),
+    channels: &Channels,
+    picture: &super::Image,
+) -> Result<()> {
+    write_exr(exr, width, height, channels)?;
+    if let Err(e) = write_png(png, picture.width, picture.height, &picture.rgb) {
+        let _ = std::fs::remove_file(exr);
+        return Err(e);
+    }
+    Ok(())
+}

@@ -302,6 +302,24 @@ pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
     s
 }
 
+/// Runs `pass(windowed scene, width)` once per window of `window` parameters among slots `0..count`
+/// (the window's slots renumbered from 0 by [`window_slots`], `width` of them selected), in slot
+/// order; at least once, with `width` 0, when `count` is 0.
+pub fn for_each_window<T>(
+    scene: &Scene,
+    count: usize,
+    window: usize,
+    mut pass: impl FnMut(&Scene, usize) -> T,
+) -> Vec<T> {
+    (0..count.max(1))
+        .step_by(window.max(1))
+        .map(|lo| {
+            let width = count.saturating_sub(lo).min(window);
+            pass(&window_slots(scene, lo, window), width)
+        })
+        .collect()
+}
+
 /// Whether the geometry of a shape (SDF or translation, not the material) has a selected parameter.
 fn geometry_selected(shape: &Shape) -> bool {
     let mut any = shape.translate.c.iter().any(|p| p.slot.is_some());

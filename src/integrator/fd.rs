@@ -101,7 +101,7 @@ mod tests {
         let options = RenderOptions {
             spp: 4,
             seed: 3,
-            progress: false,
+            progress: Default::default(),
         };
         let (image, _) = super::super::render(&scene, &options);
         let h = default_step(2.0);

@@ -8,10 +8,13 @@
 //! Conventions (as in num-dual): comparisons look at the primal value only. A branch taken on a primal
 //! value loses the derivative of the branch condition; where that matters a boundary term recovers it.
 
+mod directions;
 mod dual;
 mod dual_array;
 pub mod rules;
 
+pub(crate) use directions::dispatch_directions;
+pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
 pub use num_dual::Dual32;

@@ -8,13 +8,13 @@
 //! strictness of `#[serde(deny_unknown_fields)]`. All validation happens before any rendering type that
 //! does work on construction ([`Shape::new`] computes bounds) is built.
 
+use super::integrator_kind::IntegratorKind;
 use super::{NamedEmitter, Scene, Shape};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::error::{Error, Result};
 use crate::film::Filter;
-use crate::integrator::IntegratorKind;
 use crate::scalar::{Param, Param3};
 use crate::sdf::{GridData, Sdf, read_npy};
 use glam::Vec3;

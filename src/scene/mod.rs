@@ -1,15 +1,16 @@
 //! The scene in `f32` (with a [`crate::Param`] for every differentiable number) and ray queries against it.
 //! Parsing lives in [`load`]; rendering types never see serde.
 
+mod integrator_kind;
 mod json;
 mod params;
 
+pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::integrator::IntegratorKind;
 use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};

@@ -44,3 +44,49 @@ pub fn bake(sdf: &Sdf, bbox_min: glam::Vec3, bbox_max: glam::Vec3, res: usize) -
         });
     GridData { dims, values }
 }
+
+/// Relative padding of [`bake_padded`]'s box: the B-spline needs samples beyond the surface on every
+/// side, where its reconstruction is accurate.
+pub const BAKE_PADDING: f32 = 0.1;
+
+/// A node sampled onto a grid by [`bake_padded`], with the box its samples span.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    /// The samples, `[nx, ny, nz]`.
+    pub grid: GridData,
+    /// Corner of the box at the first sample.
+    pub bbox_min: glam::Vec3,
+    /// Corner of the box at the last sample.
+    pub bbox_max: glam::Vec3,
+}
+
+impl Baked {
+    /// The grid node of a scene file that uses the samples written to `file` (a path relative to the
+    /// scene file), as one line of JSON.
+    pub fn scene_node(&self, file: &str) -> String {
+        let (lo, hi) = (self.bbox_min, self.bbox_max);
+        let file = serde_json::Value::from(file);
+        format!(
+            "{{\"type\": \"grid\", \"file\": {file}, \"bbox_min\": [{}, {}, {}], \"bbox_max\": [{}, {}, {}]}}",
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        )
+    }
+}
+
+/// Samples `sdf` in its own coordinates over its bounds padded by [`BAKE_PADDING`] of the longest
+/// edge, `res` samples along the longest edge ([`bake`]). Errors: an unbounded node (e.g. a plane),
+/// named `what` in the message.
+pub fn bake_padded(sdf: &Sdf, res: usize, what: &str) -> crate::Result<Baked> {
+    let local = sdf.bounds();
+    if !local.is_finite() || local.is_empty() {
+        return Err(crate::Error::Unsupported(format!(
+            "{what} is unbounded (e.g. a plane), it cannot be baked into a grid"
+        )));
+    }
+    let padded = local.expanded(BAKE_PADDING * local.extent().max_element());
+    Ok(Baked {
+        grid: bake(sdf, padded.min, padded.max, res),
+        bbox_min: padded.min,
+        bbox_max: padded.max,
+    })
+}

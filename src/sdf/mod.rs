@@ -33,7 +33,7 @@ mod npy;
 mod primitives;
 mod transform;
 
-pub use bake::{bake, bake_dims};
+pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use creases::surfaces_may_meet;
 pub use npy::{read_npy, write_npy};
 

@@ -4,10 +4,8 @@
 
 use implicit_psdr::film::Image;
 use implicit_psdr::integrator::RenderOptions;
-use implicit_psdr::integrator::derivative::{
-    DerivativeImages, DiffOptions, render_derivatives_with_boundary,
-};
 use implicit_psdr::integrator::fd::finite_difference;
+use implicit_psdr::integrator::{DerivativeImages, DiffOptions, render_derivatives_with_boundary};
 use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, Scene};
 
@@ -34,7 +32,7 @@ pub fn diff_options(spp: u32, seed: u64) -> DiffOptions {
         render: RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
         ..DiffOptions::default()
     }
@@ -150,7 +148,7 @@ pub fn fd(scene: &Scene, name: &str, h: f32, spp: u32, seed: u64) -> Vec<f64> {
         &RenderOptions {
             spp,
             seed,
-            progress: false,
+            progress: Default::default(),
         },
     )
     .unwrap();

@@ -67,16 +67,19 @@
 //! the outlines half and half when both exist ([`split_samples`]), all to one when the other is absent.
 
 use super::{
-    BACKGROUND_OFFSET_PIXELS, Splat, accumulate_samples, attached_first_vertex, background_offset,
-    background_radiance, finite_splat, on_film, projection_jacobian, splat_filtered,
+    BACKGROUND_OFFSET_PIXELS, accumulate_samples, attached_first_vertex, background_offset,
+    background_radiance, finite_splat, on_film, projection_jacobian, splat_on_film,
 };
 use crate::emitter::Emitter;
 use crate::film::Image;
+use crate::film::accumulate::SplatTile;
 use crate::integrator::attach::SceneAttach;
-use crate::integrator::derivative::Directions;
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::Progress;
 use crate::integrator::path::{PathRecord, TraceCounters, VertexKind};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
+use crate::scalar::Directions;
 use crate::scalar::Scalar;
 use crate::scene::Scene;
 
@@ -348,19 +351,21 @@ pub fn add_outline_pass<S: Directions>(
     width: usize,
     seed: u64,
     samples: u64,
+    progress: &Progress,
     radiance: &mut [Image],
     coverage: &mut [Image],
-) {
+) -> RenderStats {
     if outlines.is_empty() {
-        return;
+        return RenderStats::default();
     }
     let attach = SceneAttach::new(scene);
     accumulate_samples::<S, _>(
         scene,
         width,
         samples,
-        || (PathRecord::default(), TraceCounters::default()),
-        |(record, counters), k, splats| {
+        ("primary (emitter outlines)", progress),
+        PathRecord::default,
+        |record, counters, k, splats| {
             let mut sampler = Sampler::new(seed, EDGE_STREAM, 0, k);
             sample(
                 scene,
@@ -374,7 +379,7 @@ pub fn add_outline_pass<S: Directions>(
         },
         radiance,
         coverage,
-    );
+    )
 }
 
 /// The film velocity `∂π P_π(x)` of an attached point (derivative parts only; primal 0).
@@ -391,7 +396,7 @@ fn sample<S: Directions>(
     outlines: &EmitterOutlines,
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut Vec<Splat<S>>,
+    splats: &mut SplatTile<S>,
     counters: &mut TraceCounters,
 ) {
     let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
@@ -471,6 +476,6 @@ fn sample<S: Directions>(
     let value = Vec3::<S>::constant(scale) * v;
     let cover = v * S::constant(-measure);
     if finite_splat(&value, cover) {
-        splat_filtered(scene, (px, py), value, cover, splats);
+        splat_on_film(scene, (px, py), value, cover, splats);
     }
 }

@@ -23,113 +23,54 @@ pub use segment::{
 };
 
 use crate::camera::CameraFrame;
-use crate::error::{Error, Result};
-use crate::film::Image;
-use crate::integrator::attach::{SceneAttach, window_slots};
-use crate::integrator::derivative::Directions;
+use crate::film::accumulate::SplatTile;
+use crate::film::{Image, SplatFilm, splat_filtered};
+use crate::integrator::attach::SceneAttach;
+use crate::integrator::driver::{self, RenderStats};
+use crate::integrator::options::Progress;
 use crate::integrator::path::{
     PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
 };
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
-use crate::scalar::Scalar;
+use crate::scalar::{Directions, Scalar};
 use crate::scene::Scene;
-use rayon::prelude::*;
 
-/// The boundary terms exist for both integrators (`direct` is `path` with one scattering vertex) and
-/// continuous pixel filters; `term` names the term in the error.
-fn check_supported(scene: &Scene, term: &str) -> Result<()> {
-    if !scene.camera.filter.is_continuous() {
-        return Err(Error::Unsupported(format!(
-            "the {term} boundary term with the box filter needs pixel-edge terms: use the tent or \
-             gaussian filter"
-        )));
-    }
-    Ok(())
-}
-
-/// Runs `pass(windowed scene, width)` once per window of `S::COUNT` parameters of slots `0..count`
-/// (the window's slots renumbered from 0) and concatenates the per-parameter images in slot order.
-fn in_windows<S: Directions>(
-    scene: &Scene,
-    count: usize,
-    mut pass: impl FnMut(&Scene, usize) -> Vec<Image>,
-) -> Vec<Image> {
-    let mut out = Vec::with_capacity(count);
-    for lo in (0..count).step_by(S::COUNT) {
-        let width = (count - lo).min(S::COUNT);
-        out.extend(pass(&window_slots(scene, lo, S::COUNT), width));
-    }
-    out
-}
-
-/// One splat of a boundary sample: a pixel, its share of the radiance jump and of the jump of the pixel
-/// filter's own integral `W` (0 for the secondary term: its jumps leave `W` unchanged).
-pub(crate) struct Splat<S> {
-    pixel: usize,
-    radiance: Vec3<S>,
-    coverage: S,
-}
-
-/// Boundary samples per parallel work item (results are gathered in sample order: deterministic).
+/// Boundary samples per parallel work item (results are merged in sample order: deterministic).
 const CHUNK: u64 = 256;
 
-/// Runs boundary samples `0..samples` in parallel chunks (`state()` once per chunk, `sample(state, k,
-/// splats)` for sample `k`) and adds the mean of their splats to `radiance[k]` and `coverage[k]` (the
-/// same value in the three channels) for directions `k < width` of `S`. The splats are summed in `f64`
-/// in sample order: the result does not depend on the thread count.
+/// Runs boundary samples `0..samples` in parallel chunks on the [`driver`] (`state()` once per chunk,
+/// `sample(state, counters, k, tile)` for sample `k`) and adds the mean of their splats to
+/// `radiance[k]` and `coverage[k]` (the same value in the three channels) for directions `k < width` of
+/// `S` ([`SplatFilm`]: sums in `f64` in sample order, whatever the thread count). Returns the counts of
+/// the traced rays; `stage` names the work for `progress`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn accumulate_samples<S: Directions, T>(
     scene: &Scene,
     width: usize,
     samples: u64,
+    (stage, progress): (&str, &Progress),
     state: impl Fn() -> T + Sync,
-    sample: impl Fn(&mut T, u64, &mut Vec<Splat<S>>) + Sync,
+    sample: impl Fn(&mut T, &mut TraceCounters, u64, &mut SplatTile<S>) + Sync,
     radiance: &mut [Image],
     coverage: &mut [Image],
-) {
+) -> RenderStats {
     if samples == 0 {
-        return;
+        return RenderStats::default();
     }
-    let chunks: Vec<Vec<Splat<S>>> = (0..samples.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut splats = Vec::new();
-            let mut st = state();
-            for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-                sample(&mut st, k, &mut splats);
-            }
-            splats
-        })
-        .collect();
-    let n = (scene.camera.width * scene.camera.height) as usize;
-    let mut acc = vec![0.0f64; 3 * width * n];
-    let mut acc_w = vec![0.0f64; width * n];
-    for s in chunks.iter().flatten() {
-        for k in 0..width {
-            let base = 3 * (k * n + s.pixel);
-            acc[base] += s.radiance.x.direction(k) as f64;
-            acc[base + 1] += s.radiance.y.direction(k) as f64;
-            acc[base + 2] += s.radiance.z.direction(k) as f64;
-            acc_w[k * n + s.pixel] += s.coverage.direction(k) as f64;
+    let mut film = SplatFilm::<S>::new(scene.camera.width, scene.camera.height, width);
+    let chunks = samples.div_ceil(CHUNK) as usize;
+    let stats = driver::run(&mut film, chunks, stage, progress, |c, tile, stats| {
+        let c = c as u64;
+        let mut st = state();
+        let mut counters = TraceCounters::default();
+        for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+            sample(&mut st, &mut counters, k, tile);
         }
-    }
-    let inv = 1.0 / samples as f64;
-    for (k, image) in radiance.iter_mut().take(width).enumerate() {
-        for (d, a) in image.rgb.iter_mut().zip(&acc[3 * k * n..3 * (k + 1) * n]) {
-            *d += (a * inv) as f32;
-        }
-    }
-    for (k, image) in coverage.iter_mut().take(width).enumerate() {
-        for (d, a) in image
-            .rgb
-            .chunks_exact_mut(3)
-            .zip(&acc_w[k * n..(k + 1) * n])
-        {
-            for c in d {
-                *c += (a * inv) as f32;
-            }
-        }
-    }
+        stats.exhausted_rays += counters.exhausted;
+    });
+    film.add_mean_to(samples, radiance, coverage);
+    stats
 }
 
 /// Whether a film point `(px, py)` (pixels) lies within the filter's reach of some pixel of the image.
@@ -149,41 +90,24 @@ pub(crate) fn finite_splat<S: Directions>(radiance: &Vec3<S>, coverage: S) -> bo
     })
 }
 
-/// Pushes the splats of values `radiance` and `coverage` at film point `(px, py)` to every pixel whose
-/// filter covers it, weighted by that filter.
-pub(crate) fn splat_filtered<S: Directions>(
+/// Splats `radiance` and `coverage` at film point `(px, py)` to every pixel whose filter covers it,
+/// weighted by that filter.
+pub(crate) fn splat_on_film<S: Directions>(
     scene: &Scene,
     (px, py): (f32, f32),
     radiance: Vec3<S>,
     coverage: S,
-    splats: &mut Vec<Splat<S>>,
+    tile: &mut SplatTile<S>,
 ) {
-    let filter = scene.camera.filter;
-    let radius = filter.radius();
-    let (w, h) = (scene.camera.width as i64, scene.camera.height as i64);
-    let reach = radius.ceil() as i64;
-    let (cx, cy) = (px.floor() as i64, py.floor() as i64);
-    for jy in (cy - reach).max(0)..=(cy + reach).min(h - 1) {
-        let dy = py - (jy as f32 + 0.5);
-        if dy.abs() >= radius {
-            continue;
-        }
-        for jx in (cx - reach).max(0)..=(cx + reach).min(w - 1) {
-            let dx = px - (jx as f32 + 0.5);
-            if dx.abs() >= radius {
-                continue;
-            }
-            let fw = filter.eval::<f32>(dx, dy);
-            if fw != 0.0 {
-                let fw = S::constant(fw);
-                splats.push(Splat {
-                    pixel: (jy * w + jx) as usize,
-                    radiance: radiance * fw,
-                    coverage: coverage * fw,
-                });
-            }
-        }
-    }
+    let camera = &scene.camera;
+    splat_filtered(
+        tile,
+        &camera.filter,
+        (camera.width, camera.height),
+        glam::Vec2::new(px, py),
+        radiance,
+        coverage,
+    );
 }
 
 /// How far outside an edge its background is looked up, in pixels (the primary term's background side).

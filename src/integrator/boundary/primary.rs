@@ -9,7 +9,7 @@
 //! visible from `c`: on one side the occluder `M` near `x_B`, on the other the background `x_D` (the
 //! first hit beyond `x_B` on the continued ray, or the environment).
 //!
-//! **Which jump.** The interior estimator ([`super::super::derivative`]) takes the first vertex by area
+//! **Which jump.** The interior estimator ([`crate::integrator::diff::interior`]) takes the first vertex by area
 //! with attached points `x + V n` and their moving projections. On `M`'s side that already moves the
 //! occluder's region of the film with the surface: at the silhouette the ray is tangent, a normal
 //! displacement `V n` moves the projected contour exactly as the silhouette moves, and the sliding of the
@@ -56,7 +56,7 @@
 //! With `differentiable` normalisation pixel `j` is `F_j / W_j`, `W_j = ∫ w_j J_film J₁ dA` the filter's
 //! own integral over the first vertices, `F_j`'s integrand with `L ≡ 1` (1 at the primal). Its visibility
 //! jumps across the same curves `Γ` and splits the same way: the occluder's side is the interior's
-//! ([`super::super::derivative`] estimates `W` with the moving filter), the background's is
+//! ([`crate::integrator::diff::interior`] estimates `W` with the moving filter), the background's is
 //!
 //! ```text
 //!   ∂W_j ⊃ ∫_Γ w_j(u) (−1) v dℓ_img                                                                  (3)
@@ -104,19 +104,22 @@
 use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
 use super::{
-    Splat, accumulate_samples, attached_first_vertex, background_offset, background_radiance,
-    check_supported, finite_splat, in_windows, on_film, projection_jacobian, splat_filtered,
+    accumulate_samples, attached_first_vertex, background_offset, background_radiance,
+    finite_splat, on_film, projection_jacobian, splat_on_film,
 };
 use crate::error::Result;
-use crate::film::Image;
-use crate::integrator::attach::SceneAttach;
-use crate::integrator::derivative::{DiffOptions, Directions, Normalization, dispatch_directions};
+use crate::film::accumulate::SplatTile;
+use crate::film::{Image, Normalization};
+use crate::integrator::attach::{SceneAttach, for_each_window};
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::silhouette_curve::{
     CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
 };
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
+use crate::scalar::{Directions, dispatch_directions};
 use crate::scene::Scene;
 
 /// The random stream of primary boundary samples (distinct from the camera's and the secondary term's).
@@ -126,7 +129,7 @@ pub const PRIMARY_STREAM: u64 = 0x9121_B0DA;
 /// (selected with [`Scene::select_parameters`]) for the `fixed` pixel normalisation, estimated with
 /// `samples` silhouette samples for the whole image (see the [module docs](self)): the
 /// [`PrimaryTerm::radiance`] part of [`render_primary_terms`]. One image per parameter, the layout of
-/// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
+/// [`crate::integrator::diff::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
 /// Errors: a box pixel filter, a failed curve extraction.
 pub fn render_primary(
@@ -146,27 +149,25 @@ pub struct PrimaryTerm {
     pub radiance: Vec<Image>,
     /// `coverage[k]`: `W`'s primary term for slot `k`, the same value in the three channels.
     pub coverage: Vec<Image>,
+    /// Counts of the traced rays.
+    pub stats: RenderStats,
 }
 
 impl PrimaryTerm {
     /// The primary term of each pixel's derivative under `normalization`: `radiance` (`fixed`), or
     /// `radiance − I ⊙ coverage` (`differentiable`, eq. (3)), `image` the rendered pixels `I`.
     pub fn combine(&self, image: &Image, normalization: Normalization) -> Vec<Image> {
-        match normalization {
-            Normalization::Fixed => self.radiance.clone(),
-            Normalization::Differentiable => self
-                .radiance
-                .iter()
-                .zip(&self.coverage)
-                .map(|(r, c)| {
-                    let mut out = r.clone();
-                    for ((o, cv), i) in out.rgb.iter_mut().zip(&c.rgb).zip(&image.rgb) {
-                        *o -= i * cv;
-                    }
-                    out
-                })
-                .collect(),
-        }
+        self.radiance
+            .iter()
+            .zip(&self.coverage)
+            .map(|(r, c)| {
+                let mut out = r.clone();
+                for ((o, cv), i) in out.rgb.iter_mut().zip(&c.rgb).zip(&image.rgb) {
+                    *o = normalization.derivative(*o, *cv, *i);
+                }
+                out
+            })
+            .collect()
     }
 }
 
@@ -189,23 +190,40 @@ pub fn render_primary_in<S: Directions>(
     options: &DiffOptions,
     samples: u64,
 ) -> Result<PrimaryTerm> {
-    check_supported(scene, "primary")?;
+    require_continuous_filter(scene, "the primary boundary term")?;
+    let mut stats = RenderStats::default();
+    if count == 0 {
+        return Ok(PrimaryTerm {
+            radiance: Vec::new(),
+            coverage: Vec::new(),
+            stats,
+        });
+    }
     let curves = silhouettes(scene)?;
     // Edges of emitters seen directly ([`emitter_edges`]) share the samples.
     let outlines = EmitterOutlines::seen_from(scene);
     let (n_curves, n_outlines) =
         emitter_edges::split_samples(samples, !curves.is_empty(), !outlines.is_empty());
     let seed = options.render.seed;
+    let progress = &options.render.progress;
+    let mut radiance = Vec::with_capacity(count);
     let mut coverage = Vec::with_capacity(count);
-    let radiance = in_windows::<S>(scene, count, |windowed, width| {
-        let (mut r, mut c) = pass::<S>(windowed, &curves, width, seed, n_curves);
-        emitter_edges::add_outline_pass::<S>(
-            windowed, &outlines, width, seed, n_outlines, &mut r, &mut c,
-        );
+    for (r, c, s) in for_each_window(scene, count, S::COUNT, |windowed, width| {
+        let (mut r, mut c, mut s) = pass::<S>(windowed, &curves, width, seed, n_curves, progress);
+        s.absorb(emitter_edges::add_outline_pass::<S>(
+            windowed, &outlines, width, seed, n_outlines, progress, &mut r, &mut c,
+        ));
+        (r, c, s)
+    }) {
+        radiance.extend(r);
         coverage.extend(c);
-        r
-    });
-    Ok(PrimaryTerm { radiance, coverage })
+        stats.absorb(s);
+    }
+    Ok(PrimaryTerm {
+        radiance,
+        coverage,
+        stats,
+    })
 }
 
 /// The silhouette curves seen from the camera centre of every shape with finite bounds and curved
@@ -233,20 +251,22 @@ fn pass<S: Directions>(
     width: usize,
     seed: u64,
     samples: u64,
-) -> (Vec<Image>, Vec<Image>) {
+    progress: &Progress,
+) -> (Vec<Image>, Vec<Image>, RenderStats) {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mut images = vec![Image::new(w, h); width];
     let mut coverage = vec![Image::new(w, h); width];
     if curves.is_empty() {
-        return (images, coverage);
+        return (images, coverage, RenderStats::default());
     }
     let attach = SceneAttach::new(scene);
-    accumulate_samples::<S, _>(
+    let stats = accumulate_samples::<S, _>(
         scene,
         width,
         samples,
-        || (PathRecord::default(), TraceCounters::default()),
-        |(record, counters), k, splats| {
+        ("primary", progress),
+        PathRecord::default,
+        |record, counters, k, splats| {
             let mut sampler = Sampler::new(seed, PRIMARY_STREAM, 0, k);
             sample(
                 scene,
@@ -261,7 +281,7 @@ fn pass<S: Directions>(
         &mut images,
         &mut coverage,
     );
-    (images, coverage)
+    (images, coverage, stats)
 }
 
 /// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
@@ -271,7 +291,7 @@ fn sample<S: Directions>(
     curves: &[(usize, SilhouetteCurve)],
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut Vec<Splat<S>>,
+    splats: &mut SplatTile<S>,
     counters: &mut TraceCounters,
 ) {
     let k = curves.len();
@@ -363,6 +383,6 @@ fn sample<S: Directions>(
     let value = Vec3::<S>::constant(scale) * v;
     let cover = v * S::constant(-measure);
     if finite_splat(&value, cover) {
-        splat_filtered(scene, (px, py), value, cover, splats);
+        splat_on_film(scene, (px, py), value, cover, splats);
     }
 }

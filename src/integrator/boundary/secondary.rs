@@ -121,16 +121,20 @@
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{Splat, accumulate_samples, check_supported, finite_splat, in_windows, splat_filtered};
+use super::{accumulate_samples, finite_splat, splat_on_film};
 use crate::error::Result;
 use crate::film::Image;
+use crate::film::accumulate::SplatTile;
 use crate::integrator::attach::SceneAttach;
-use crate::integrator::derivative::{DiffOptions, Directions, dispatch_directions};
+use crate::integrator::attach::for_each_window;
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::shading::geometry_term;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
+use crate::scalar::{Directions, dispatch_directions};
 use crate::scene::{Intersection, Scene, Surface};
 
 /// The random stream of boundary samples (distinct from the camera's
@@ -143,7 +147,7 @@ pub const SUBPATH_STREAM: u64 = 0x5AB_9A7E;
 /// The secondary boundary term of the derivative with respect to the parameters in slots `0..count`
 /// (selected with [`Scene::select_parameters`]), estimated with `samples` boundary samples for the whole
 /// image (see the [module docs](self)). One image per parameter, the layout of
-/// [`super::super::derivative::DerivativeImages::interior`]; the seed is `options.render.seed`.
+/// [`crate::integrator::diff::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
 /// Errors: a box pixel filter.
 pub fn render_secondary(
@@ -164,9 +168,23 @@ pub fn render_secondary_with(
     samples: u64,
     tangent: TangentSampling,
 ) -> Result<Vec<Image>> {
-    dispatch_directions!(
+    Ok(dispatch_directions!(
         count,
         render_secondary_in(scene, count, options, samples, tangent)
+    )?
+    .0)
+}
+
+/// [`render_secondary`] with the counts of the traced rays.
+pub fn render_secondary_terms(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    samples: u64,
+) -> Result<(Vec<Image>, RenderStats)> {
+    dispatch_directions!(
+        count,
+        render_secondary_in(scene, count, options, samples, TangentSampling::Steered)
     )
 }
 
@@ -177,11 +195,22 @@ pub fn render_secondary_in<S: Directions>(
     options: &DiffOptions,
     samples: u64,
     tangent: TangentSampling,
-) -> Result<Vec<Image>> {
-    check_supported(scene, "secondary")?;
-    Ok(in_windows::<S>(scene, count, |windowed, width| {
-        pass::<S>(windowed, width, options.render.seed, samples, tangent)
-    }))
+) -> Result<(Vec<Image>, RenderStats)> {
+    require_continuous_filter(scene, "the secondary boundary term")?;
+    let mut stats = RenderStats::default();
+    let mut images = Vec::with_capacity(count);
+    if count == 0 {
+        return Ok((images, stats));
+    }
+    let seed = options.render.seed;
+    let progress = &options.render.progress;
+    for (pass_images, pass_stats) in for_each_window(scene, count, S::COUNT, |windowed, width| {
+        pass::<S>(windowed, width, seed, samples, tangent, progress)
+    }) {
+        images.extend(pass_images);
+        stats.absorb(pass_stats);
+    }
+    Ok((images, stats))
 }
 
 /// One pass over all boundary samples: directions `0..width` of `S`.
@@ -191,7 +220,8 @@ fn pass<S: Directions>(
     seed: u64,
     samples: u64,
     tangent: TangentSampling,
-) -> Vec<Image> {
+    progress: &Progress,
+) -> (Vec<Image>, RenderStats) {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let candidates: Vec<usize> = (0..scene.shapes.len())
         .filter(|&i| {
@@ -202,7 +232,7 @@ fn pass<S: Directions>(
         .collect();
     let mut images = vec![Image::new(w, h); width];
     if candidates.is_empty() {
-        return images;
+        return (images, RenderStats::default());
     }
     let ctx = Context {
         scene,
@@ -210,19 +240,20 @@ fn pass<S: Directions>(
         candidates,
         tangent: TangentSampler::new(scene, tangent),
     };
-    accumulate_samples::<S, _>(
+    let stats = accumulate_samples::<S, _>(
         scene,
         width,
         samples,
-        || (Vec::new(), TraceCounters::default()),
-        |(hits, counters), k, splats| {
+        ("secondary", progress),
+        Vec::new,
+        |hits, counters, k, splats| {
             let mut sampler = Sampler::new(seed, BOUNDARY_STREAM, 0, k);
             ctx.sample(&mut sampler, hits, splats, counters);
         },
         &mut images,
         &mut [],
     );
-    images
+    (images, stats)
 }
 
 /// What every boundary sample needs.
@@ -264,7 +295,7 @@ impl Context<'_> {
         &self,
         sampler: &mut Sampler,
         hits: &mut Vec<SurfaceSample>,
-        splats: &mut Vec<Splat<S>>,
+        splats: &mut SplatTile<S>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
@@ -325,7 +356,7 @@ impl Context<'_> {
         s_end: &Intersection,
         d_end: &Intersection,
         weight: f32,
-        splats: &mut Vec<Splat<S>>,
+        splats: &mut SplatTile<S>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
@@ -466,7 +497,7 @@ impl Context<'_> {
             }
             let value = Vec3::<S>::constant(scale) * v;
             if finite_splat(&value, S::zero()) {
-                splat_filtered(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
+                splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
             }
         }
     }

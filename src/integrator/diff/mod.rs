@@ -1,0 +1,178 @@
+//! Forward-mode derivative images: the orchestrator of the complete derivative, interior term
+//! ([`interior`]) plus the primary and secondary boundary terms ([`crate::integrator::boundary`]).
+//!
+//! Parameters are selected with [`Scene::select_parameters`] (slots `0..count`) and processed in passes
+//! of the scalar type's width (`DualN<N>` carries `N` directions); each pass traces the same paths
+//! (same seed), so passes agree on the image and on shared parameters.
+
+pub mod interior;
+
+use crate::error::Result;
+use crate::film::{Channels, Image};
+use crate::integrator::boundary::{primary, secondary};
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::DiffOptions;
+use crate::scalar::dispatch_directions;
+use crate::scene::Scene;
+
+/// The image and one derivative image per selected parameter, term by term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DerivativeImages {
+    /// The image (identical to [`crate::integrator::render`]'s for the same seed and spp).
+    pub image: Image,
+    /// `interior[k]`: interior term of the derivative with respect to the parameter in slot `k`.
+    pub interior: Vec<Image>,
+    /// `secondary[k]`: the secondary boundary term (shadows, [`secondary`]) for slot `k`; empty when
+    /// it was not computed (budget 0).
+    pub secondary: Vec<Image>,
+    /// `primary[k]`: the primary boundary term (silhouettes seen by the camera, [`primary`]) for slot
+    /// `k`; empty when it was not computed (budget 0).
+    pub primary: Vec<Image>,
+    /// Counters.
+    pub stats: RenderStats,
+}
+
+/// The image and the complete derivative (interior, primary and secondary terms) with respect to the
+/// parameters in slots `0..count`, with the boundary budgets of `options.boundary` (samples per pixel;
+/// a term with budget 0 is skipped). Errors: a box pixel filter, a failed silhouette extraction.
+pub fn render_derivatives(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+) -> Result<DerivativeImages> {
+    let (primary, secondary) = options.boundary.totals(scene, options.render.spp);
+    render_derivatives_with_boundary(scene, count, options, primary, secondary)
+}
+
+/// The image and the interior term alone (the boundary budgets of `options` are ignored): what
+/// renderers without boundary terms return, biased wherever edges move.
+///
+/// Dispatches on `count` to `DualN<1|2|4|8>`; more than eight parameters take several passes of eight.
+pub fn render_interior(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+) -> Result<DerivativeImages> {
+    dispatch_directions!(count, render_interior_in(scene, count, options))
+}
+
+/// [`render_interior`] with a chosen scalar type `S`, in passes of `S::COUNT` parameters.
+pub fn render_interior_in<S: crate::scalar::Directions>(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+) -> Result<DerivativeImages> {
+    let start = std::time::Instant::now();
+    let (image, interior, mut stats) = interior::render_interior_in::<S>(scene, count, options)?;
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(DerivativeImages {
+        image,
+        interior,
+        secondary: Vec::new(),
+        primary: Vec::new(),
+        stats,
+    })
+}
+
+/// The interior term plus the boundary terms with explicit budgets for the whole image:
+/// `primary_samples` silhouette samples and `secondary_samples` boundary samples (0 skips a term).
+pub fn render_derivatives_with_boundary(
+    scene: &Scene,
+    count: usize,
+    options: &DiffOptions,
+    primary_samples: u64,
+    secondary_samples: u64,
+) -> Result<DerivativeImages> {
+    let start = std::time::Instant::now();
+    let mut out = render_interior(scene, count, options)?;
+    if secondary_samples > 0 {
+        let (images, stats) =
+            secondary::render_secondary_terms(scene, count, options, secondary_samples)?;
+        out.secondary = images;
+        out.stats.absorb(stats);
+    }
+    if primary_samples > 0 {
+        let term = primary::render_primary_terms(scene, count, options, primary_samples)?;
+        out.primary = term.combine(&out.image, options.normalization);
+        out.stats.absorb(term.stats);
+    }
+    out.stats.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+impl DerivativeImages {
+    /// The derivative images: `interior[k] + secondary[k] + primary[k]`, each boundary term where it
+    /// was computed.
+    pub fn total(&self) -> Vec<Image> {
+        let mut total = self.interior.clone();
+        for term in [&self.secondary, &self.primary] {
+            for (t, s) in total.iter_mut().zip(term) {
+                for (a, b) in t.rgb.iter_mut().zip(&s.rgb) {
+                    *a += b;
+                }
+            }
+        }
+        total
+    }
+
+    /// The EXR channels of a derivative command: `R`, `G`, `B` (the image), `d.P.R|G|B` per parameter
+    /// `P` of `names` (the complete derivative), and with `terms` each term, `d_interior.P.*`,
+    /// `d_primary.P.*`, `d_secondary.P.*` (they sum to `d.P`; a term not computed has no channels).
+    pub fn channels(&self, names: &[String], terms: bool) -> Channels {
+        let mut channels = self.image.rgb_channels("");
+        for (p, d) in names.iter().zip(&self.total()) {
+            channels.extend(d.rgb_channels(&format!("d.{p}.")));
+        }
+        if terms {
+            for (term, images) in [
+                ("d_interior", &self.interior),
+                ("d_primary", &self.primary),
+                ("d_secondary", &self.secondary),
+            ] {
+                for (p, d) in names.iter().zip(images) {
+                    channels.extend(d.rgb_channels(&format!("{term}.{p}.")));
+                }
+            }
+        }
+        channels
+    }
+
+    /// A one-line note for the user: which terms the derivative holds, and the shapes with crease
+    /// edges (`(name, reason)`, [`Scene::creased_shapes`]) whose boundary terms are not sampled.
+    pub fn note(&self, creased: &[(String, String)]) -> String {
+        if self.primary.is_empty() && self.secondary.is_empty() {
+            return "derivatives hold the interior term only (both boundary budgets are 0); the \
+                    silhouette and shadow terms are missing, so d.P is wrong where edges move"
+                .into();
+        }
+        let mut held = vec!["interior"];
+        let mut skipped = Vec::new();
+        for (term, name) in [
+            (&self.secondary, "secondary (shadow)"),
+            (&self.primary, "primary (silhouette)"),
+        ] {
+            if term.is_empty() {
+                skipped.push(name);
+            } else {
+                held.push(name);
+            }
+        }
+        let held = match held.as_slice() {
+            [rest @ .., last] if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => held.join(""),
+        };
+        let mut note = format!("derivatives hold the {held} terms");
+        if !skipped.is_empty() {
+            note += &format!("; skipped: {} (budget 0)", skipped.join(", "));
+        }
+        if !creased.is_empty() {
+            let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
+            note += &format!(
+                "; crease edges are not sampled, so where they move or hide what moves d.P misses \
+                 their boundary terms: {}",
+                list.join(", ")
+            );
+        }
+        note
+    }
+}

@@ -1,0 +1,112 @@
+//! The image: one camera path per sample, each pixel the mean of its own samples (the film offset of each
+//! sample is drawn exactly from the pixel filter, so every sample's filter weight over its density is 1).
+
+use super::driver::{self, RenderStats};
+use super::options::RenderOptions;
+use super::path::{PathRecord, TraceCounters, contribution, detached, trace_path};
+use crate::camera::CameraFrame;
+use crate::film::{Image, PixelFilm, SampleSink};
+use crate::math::Vec3;
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+
+/// Stream of the [`Sampler`] used by camera paths.
+pub const CAMERA_STREAM: u64 = 0;
+
+/// Traces camera sample `sample` of pixel `(x, y)` into `record`: draws the film offset from the pixel
+/// filter, generates the ray through it and traces the path. Returns the offset (pixels, from the pixel
+/// centre) and the camera ray. `frame` is `scene.camera.frame::<f32>()`, built once per render.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn trace_sample(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    seed: u64,
+    x: u32,
+    y: u32,
+    sample: u32,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) -> (glam::Vec2, crate::math::Ray) {
+    let camera = &scene.camera;
+    let pixel = y as u64 * camera.width as u64 + x as u64;
+    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
+    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let offset = camera.filter.sample(sampler.next_2d());
+    let ray = frame.generate_ray(centre + offset);
+    trace_path(
+        scene,
+        ray,
+        scene.integrator.max_scatter(),
+        &mut sampler,
+        record,
+        counters,
+    );
+    (offset, ray)
+}
+
+/// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
+/// `frame` is `scene.camera.frame::<f32>()`, built once per render.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_pixel(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    seed: u64,
+    x: u32,
+    y: u32,
+    sample: u32,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) -> glam::Vec3 {
+    trace_sample(scene, frame, seed, x, y, sample, record, counters);
+    contribution::<f32>(scene, record, detached).into()
+}
+
+/// Renders the image of `scene`.
+///
+/// Rows are rendered in parallel ([`driver::run`]); each pixel sums its own samples in a fixed order,
+/// so the image is identical bit for bit whatever the number of threads.
+pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
+    let start = std::time::Instant::now();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let spp = options.spp.max(1);
+    let frame = scene.camera.frame::<f32>();
+    let mut film = PixelFilm::<f32>::new(width, height, 0);
+    let mut stats = driver::run(
+        &mut film,
+        height as usize,
+        "image",
+        &options.progress,
+        |y, tile, stats| {
+            let y = y as u32;
+            let mut record = PathRecord::default();
+            let mut counters = TraceCounters::default();
+            for x in 0..width {
+                let pixel = (y * width + x) as usize;
+                for s in 0..spp {
+                    let l = sample_pixel(
+                        scene,
+                        &frame,
+                        options.seed,
+                        x,
+                        y,
+                        s,
+                        &mut record,
+                        &mut counters,
+                    );
+                    if l.is_finite() {
+                        tile.add_own(pixel, Vec3::from(l), 1.0);
+                    } else {
+                        stats.invalid(false, || {
+                            format!("non-finite radiance {l} at pixel ({x}, {y}), sample {s}")
+                        });
+                    }
+                }
+            }
+            stats.exhausted_rays += counters.exhausted;
+        },
+    );
+    stats.samples = spp as u64 * width as u64 * height as u64;
+    stats.seconds = start.elapsed().as_secs_f64();
+    (film.image(spp), stats)
+}
