@@ -225,6 +225,42 @@ pub fn compare_files(a: &Path, b: &Path, prefix: Option<&str>) -> Result<Vec<Cha
         .map_err(|e| Error::Unsupported(format!("{} vs {}: {e}", a.display(), b.display())))
 }
 
+/// The table `compare` prints: one row per channel of `rows`, `a` checked against the reference `b`.
+pub fn format_table(a: &Path, b: &Path, rows: &[ChannelComparison]) -> String {
+    let width = rows
+        .iter()
+        .map(|r| r.name.len())
+        .max()
+        .unwrap_or(0)
+        .max("channel".len());
+    let mut text = format!(
+        "A = {}, B = {} (the reference): rel.err = |A - B| / |B| (L2), blurred after a 5x5 box blur\n",
+        a.display(),
+        b.display()
+    );
+    text += &format!(
+        "{:<width$}  {:>10}  {:>12}  {:>11}  {:>11}  {:>11}  {:>11}  {:>8}\n",
+        "channel", "rel.err", "rel.err.blur", "sum A", "sum B", "sum |A|", "sum |B|", "corr"
+    );
+    for r in rows {
+        let correlation = r
+            .correlation
+            .map_or_else(|| "n/a".to_string(), |c| format!("{c:.5}"));
+        text += &format!(
+            "{:<width$}  {:>10.3e}  {:>12.3e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>8}\n",
+            r.name,
+            r.relative_l2,
+            r.relative_l2_blurred,
+            r.sum_a,
+            r.sum_b,
+            r.abs_sum_a,
+            r.abs_sum_b,
+            correlation
+        );
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -354,40 +390,4 @@ mod tests {
         assert_eq!(ok.len(), 1);
         assert_eq!(ok[0].relative_l2, 0.0);
     }
-}
-
-/// The table `compare` prints: one row per channel of `rows`, `a` checked against the reference `b`.
-pub fn format_table(a: &Path, b: &Path, rows: &[ChannelComparison]) -> String {
-    let width = rows
-        .iter()
-        .map(|r| r.name.len())
-        .max()
-        .unwrap_or(0)
-        .max("channel".len());
-    let mut text = format!(
-        "A = {}, B = {} (the reference): rel.err = |A - B| / |B| (L2), blurred after a 5x5 box blur\n",
-        a.display(),
-        b.display()
-    );
-    text += &format!(
-        "{:<width$}  {:>10}  {:>12}  {:>11}  {:>11}  {:>11}  {:>11}  {:>8}\n",
-        "channel", "rel.err", "rel.err.blur", "sum A", "sum B", "sum |A|", "sum |B|", "corr"
-    );
-    for r in rows {
-        let correlation = r
-            .correlation
-            .map_or_else(|| "n/a".to_string(), |c| format!("{c:.5}"));
-        text += &format!(
-            "{:<width$}  {:>10.3e}  {:>12.3e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>11.4e}  {:>8}\n",
-            r.name,
-            r.relative_l2,
-            r.relative_l2_blurred,
-            r.sum_a,
-            r.sum_b,
-            r.abs_sum_a,
-            r.abs_sum_b,
-            correlation
-        );
-    }
-    text
 }

@@ -9,7 +9,10 @@ use std::sync::Arc;
 /// A progress callback: `(stage, done, total)` work items of the named stage ("image", "interior",
 /// "primary", "secondary"), called from worker threads as items finish. The default reports nothing.
 #[derive(Clone, Default)]
-pub struct Progress(Option<Arc<dyn Fn(&str, u64, u64) + Send + Sync>>);
+pub struct Progress(Option<Arc<ReportFn>>);
+
+/// The callback behind [`Progress`]: `(stage, done, total)`.
+type ReportFn = dyn Fn(&str, u64, u64) + Send + Sync;
 
 impl Progress {
     /// Calls `report(stage, done, total)` as work items finish.

@@ -75,7 +75,7 @@ use crate::film::Image;
 use crate::film::accumulate::SplatTile;
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::RenderStats;
-use crate::integrator::options::Progress;
+use crate::integrator::options::RenderOptions;
 use crate::integrator::path::{PathRecord, TraceCounters, VertexKind};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
@@ -349,9 +349,8 @@ pub fn add_outline_pass<S: Directions>(
     scene: &Scene,
     outlines: &EmitterOutlines,
     width: usize,
-    seed: u64,
+    render: &RenderOptions,
     samples: u64,
-    progress: &Progress,
     radiance: &mut [Image],
     coverage: &mut [Image],
 ) -> RenderStats {
@@ -363,10 +362,10 @@ pub fn add_outline_pass<S: Directions>(
         scene,
         width,
         samples,
-        ("primary (emitter outlines)", progress),
+        ("primary (emitter outlines)", &render.progress),
         PathRecord::default,
         |record, counters, k, splats| {
-            let mut sampler = Sampler::new(seed, EDGE_STREAM, 0, k);
+            let mut sampler = Sampler::new(render.seed, EDGE_STREAM, 0, k);
             sample(
                 scene,
                 &attach,

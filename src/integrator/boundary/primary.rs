@@ -211,7 +211,13 @@ pub fn render_primary_in<S: Directions>(
     for (r, c, s) in for_each_window(scene, count, S::COUNT, |windowed, width| {
         let (mut r, mut c, mut s) = pass::<S>(windowed, &curves, width, seed, n_curves, progress);
         s.absorb(emitter_edges::add_outline_pass::<S>(
-            windowed, &outlines, width, seed, n_outlines, progress, &mut r, &mut c,
+            windowed,
+            &outlines,
+            width,
+            &options.render,
+            n_outlines,
+            &mut r,
+            &mut c,
         ));
         (r, c, s)
     }) {
