@@ -1,4 +1,5 @@
-//! Builds the default scene in code (no JSON), renders it and writes `sphere.exr` and `sphere.png`.
+//! Builds the default scene in code (no JSON), renders it and writes `examples-out/sphere.exr` and
+//! `examples-out/sphere.png`.
 //!
 //! `cargo run --release --example render_sphere`
 
@@ -6,7 +7,7 @@ use glam::Vec3;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
-use implicit_psdr::film::{Filter, write_exr, write_png};
+use implicit_psdr::film::{Filter, write_exr_and_png};
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions, render};
 use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
 use implicit_psdr::sdf::Sdf;
@@ -62,21 +63,11 @@ fn main() -> implicit_psdr::Result<()> {
         },
     );
     println!("{} samples in {:.2} s", stats.samples, stats.seconds);
-    let channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"]
-        .iter()
-        .enumerate()
-        .map(|(c, name)| (name.to_string(), image.channel(c)))
-        .collect();
-    write_exr(
-        Path::new("sphere.exr"),
-        image.width,
-        image.height,
-        &channels,
-    )?;
-    write_png(
-        Path::new("sphere.png"),
-        image.width,
-        image.height,
-        &image.rgb,
-    )
+    let dir = Path::new("examples-out");
+    std::fs::create_dir_all(dir).map_err(|e| implicit_psdr::Error::file(dir, e))?;
+    let (exr, png) = (dir.join("sphere.exr"), dir.join("sphere.png"));
+    let size = (image.width, image.height);
+    write_exr_and_png(&exr, &png, size, &image.rgb_channels(""), &image)?;
+    println!("wrote {} and {}", exr.display(), png.display());
+    Ok(())
 }

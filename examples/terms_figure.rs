@@ -9,7 +9,7 @@ use implicit_psdr::film::colormap::{derivative_panel, diverging, side_by_side, s
 use implicit_psdr::film::{Image, write_png};
 use implicit_psdr::integrator::RenderOptions;
 use implicit_psdr::integrator::fd::finite_difference;
-use implicit_psdr::integrator::{BoundaryBudget, DiffOptions, render_derivatives_with_boundary};
+use implicit_psdr::integrator::{BoundaryBudget, DiffOptions, render_derivatives};
 use implicit_psdr::scene::load;
 use std::path::Path;
 
@@ -31,7 +31,8 @@ fn panel(derivative: &Image, scale: f32) -> Image {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [scene_path, param, out] = &args[..3] else {
+    let (Some(scene_path), Some(param), Some(out)) = (args.first(), args.get(1), args.get(2))
+    else {
         return Err("usage: terms_figure SCENE.json PARAM OUT.png [SIZE] [SPP]".into());
     };
     let size: u32 = args.get(3).map_or(Ok(128), |s| s.parse())?;
@@ -42,24 +43,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.camera.height = ((size as f32 * aspect).round() as u32).max(1);
     let reference = scene.clone();
     scene.select_parameters(std::slice::from_ref(param))?;
-    let pixels = (scene.camera.width * scene.camera.height) as u64;
+    // Four times `diff`'s default boundary budgets: the figure should show each term clearly.
+    let (bp, bs) = BoundaryBudget::default().resolve(spp);
     let options = DiffOptions {
         render: RenderOptions {
             spp,
             seed: 1,
             progress: Default::default(),
         },
+        boundary: BoundaryBudget {
+            primary_spp: Some(4 * bp),
+            secondary_spp: Some(4 * bs),
+        },
         ..DiffOptions::default()
     };
-    // Four times `diff`'s default boundary budgets: the figure should show each term clearly.
-    let (bp, bs) = BoundaryBudget::default().resolve(spp);
-    let d = render_derivatives_with_boundary(
-        &scene,
-        1,
-        &options,
-        4 * pixels * bp as u64,
-        4 * pixels * bs as u64,
-    )?;
+    let d = render_derivatives(&scene, 1, &options)?;
     let value = reference
         .parameters()
         .into_iter()

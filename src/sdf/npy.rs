@@ -51,7 +51,7 @@ fn parse_npy(bytes: &[u8]) -> std::result::Result<GridData, String> {
         "<f8" => 8,
         d => {
             return Err(format!(
-                "dtype must be '<f4' (float32 little-endian), got '{d}'"
+                "dtype must be '<f4' or '<f8' (float32 or float64 little-endian), got '{d}'"
             ));
         }
     };
