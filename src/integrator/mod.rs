@@ -5,6 +5,39 @@
 //! Both estimators share one tracer ([`path::trace_path`]): `Direct` is a path with a single scattering
 //! vertex. A pixel is the mean of its samples' radiances: the film offset of each sample is drawn
 //! exactly from the pixel filter, so every sample's filter weight over its density is 1.
+//!
+//! # Example
+//!
+//! An image and derivative images, as in the README's "Using the library" (run as a doc test):
+//!
+//! ```
+//! use implicit_psdr::integrator::{self, DiffOptions, RenderOptions};
+//! use implicit_psdr::{film, scene};
+//! use std::path::Path;
+//!
+//! fn main() -> implicit_psdr::Result<()> {
+//!     // An image: the scene file, its samples per pixel, a seed.
+//!     let mut scene = scene::load(Path::new("scenes/sphere_floor.json"))?;
+//!     let options = RenderOptions { spp: 16, seed: 0, ..RenderOptions::default() };
+//!     let (image, stats) = integrator::render(&scene, &options);
+//!     println!("{} exhausted rays", stats.exhausted_rays);
+//!
+//!     // Derivative images: select parameters (slot k = the k-th name), then the complete derivative
+//!     // (interior + primary + secondary terms) with the default pixel normalisation and budgets.
+//!     let params = ["ball.radius".to_string(), "light.center.x".to_string()];
+//!     scene.select_parameters(&params)?;
+//!     let d = integrator::render_derivatives(&scene, params.len(), &DiffOptions {
+//!         render: options,
+//!         ..DiffOptions::default()
+//!     })?;
+//!     // d.image is `image`; d.total()[k] is d image / d params[k]; d.interior, d.primary and
+//!     // d.secondary hold the terms. The channels `diff --terms` writes:
+//!     let channels = d.channels(&params, true);
+//!     let out = std::env::temp_dir().join("d.exr");
+//!     film::write_exr(&out, image.width, image.height, &channels)?;
+//!     Ok(())
+//! }
+//! ```
 
 pub mod attach;
 pub mod boundary;
