@@ -103,8 +103,8 @@ enum Command {
         spp_primary: Option<u32>,
         /// Pixel normalisation: `differentiable` (F / W, both differentiated: lower error) or `fixed`
         /// (the filter-weight sum is a constant).
-        #[arg(long, value_enum, default_value_t = NormalizationArg::Differentiable)]
-        normalization: NormalizationArg,
+        #[arg(long, default_value = "differentiable", value_parser = normalization)]
+        normalization: Normalization,
         #[command(flatten)]
         outputs: OutputArgs,
     },
@@ -136,15 +136,6 @@ enum Command {
     },
 }
 
-/// `--normalization` values.
-#[derive(Copy, Clone, Debug, clap::ValueEnum)]
-enum NormalizationArg {
-    /// Pixel = mean of its samples; the filter-weight sum is treated as a constant.
-    Fixed,
-    /// Pixel = F / W with both sums differentiated.
-    Differentiable,
-}
-
 /// `NAME=VALUE` with a finite value.
 fn assignment(text: &str) -> Result<(String, f32), String> {
     let (name, value) = text.split_once('=').ok_or("expected NAME=VALUE")?;
@@ -152,6 +143,11 @@ fn assignment(text: &str) -> Result<(String, f32), String> {
         Ok(v) if v.is_finite() => Ok((name.trim().to_string(), v)),
         _ => Err(format!("{value:?} is not a finite number")),
     }
+}
+
+/// `fixed` or `differentiable`.
+fn normalization(text: &str) -> Result<Normalization, String> {
+    text.parse()
 }
 
 /// A finite number > 0.
@@ -231,10 +227,6 @@ fn run(cli: Cli) -> Result<()> {
             let boundary = BoundaryBudget {
                 primary_spp: spp_primary,
                 secondary_spp: spp_secondary,
-            };
-            let normalization = match normalization {
-                NormalizationArg::Fixed => Normalization::Fixed,
-                NormalizationArg::Differentiable => Normalization::Differentiable,
             };
             diff(&scene, &params, terms, boundary, normalization, &outputs)
         }
@@ -324,19 +316,23 @@ fn write_outputs(
 
 /// Prints what went wrong during a render, on stderr.
 fn warn(stats: &RenderStats) {
-    let rays = stats.exhausted_rays;
-    if rays > 0 {
-        eprintln!(
-            "warning: {rays} rays ran out of sphere-tracing steps and were treated as misses"
-        );
+    for line in stats.warnings() {
+        eprintln!("warning: {line}");
     }
-    if let Some(first) = &stats.first_invalid {
-        let (samples, derivatives) = (stats.invalid_samples, stats.invalid_derivatives);
-        eprintln!(
-            "warning: {samples} non-finite samples (counted as black) and {derivatives} non-finite \
-             derivatives (counted as 0); the first: {first}"
-        );
-    }
+}
+
+/// Writes a derivative command's EXR `channels` and its picture (the image beside one panel per
+/// derivative); returns each panel's colour scale.
+fn write_derivatives(
+    paths: &(PathBuf, PathBuf),
+    image: &Image,
+    channels: &film::Channels,
+    derivatives: &[Image],
+) -> Result<Vec<f32>> {
+    let panels: Vec<&Image> = derivatives.iter().collect();
+    let (picture, scales) = colormap::derivative_picture(image, &panels);
+    write_outputs(paths, image, channels, &picture)?;
+    Ok(scales)
 }
 
 fn print_scales(params: &[String], scales: &[f32]) {
@@ -370,14 +366,8 @@ fn render(args: &SceneArgs, outputs: &OutputArgs) -> Result<()> {
 fn bake(scene_path: &Path, name: &str, res: usize, out: &Path) -> Result<()> {
     film::check_output_path(out, "--out", "npy")?;
     let scene = load_scene(scene_path)?;
-    let Some(shape) = scene.shapes.iter().find(|s| s.name == name) else {
-        let names: Vec<&str> = scene.shapes.iter().map(|s| s.name.as_str()).collect();
-        bail!(
-            "--shape: no shape named {name:?} in {} (shapes: {})",
-            scene_path.display(),
-            names.join(", ")
-        );
-    };
+    let shape =
+        (scene.shape_named(name)).with_context(|| format!("--shape: {}", scene_path.display()))?;
     // The grid samples the SDF in the shape's own coordinates (before its rigid translation).
     let baked = sdf::bake_padded(&shape.sdf, res, &format!("shape {name:?}")).context("--shape")?;
     sdf::write_npy(out, &baked.grid)?;
@@ -401,10 +391,10 @@ fn diff(
     outputs: &OutputArgs,
 ) -> Result<()> {
     let paths = output_paths(outputs, "diff")?;
-    for (k, p) in params.iter().enumerate() {
-        if params[..k].contains(p) {
-            bail!("--param {p} given twice");
-        }
+    if let Some(p) =
+        (params.iter().enumerate()).find_map(|(k, p)| params[..k].contains(p).then_some(p))
+    {
+        bail!("--param {p} given twice");
     }
     let (mut scene, render) = prepare(args)?;
     scene
@@ -418,10 +408,8 @@ fn diff(
     let result = integrator::render_derivatives(&scene, params.len(), &options)
         .map_err(in_file(&args.scene))?;
     let image = &result.image;
-    let total = result.total();
-    let derivatives: Vec<&Image> = total.iter().collect();
-    let (picture, scales) = colormap::derivative_picture(image, &derivatives);
-    write_outputs(&paths, image, &result.channels(params, terms), &picture)?;
+    let channels = result.channels(params, terms);
+    let scales = write_derivatives(&paths, image, &channels, &result.total())?;
 
     println!("note: {}", result.note(&scene.creased_shapes()));
     println!(
@@ -466,8 +454,7 @@ fn finite_difference(
 
     let mut channels = image.rgb_channels("");
     channels.extend(derivative.rgb_channels(&format!("d.{param}.")));
-    let (picture, scales) = colormap::derivative_picture(&image, &[&derivative]);
-    write_outputs(&paths, &image, &channels, &picture)?;
+    let scales = write_derivatives(&paths, &image, &channels, std::slice::from_ref(&derivative))?;
     println!(
         "central differences of {param} = {value} with h = {h} (common random numbers): rendered \
          {}x{} three times at {} spp in {seconds:.2} s; wrote {} and {}",

@@ -27,6 +27,11 @@ fn assert_success(out: &Output) -> String {
 /// The default scene (`scenes/sphere_floor.json`) at 16×16 pixels, 4 spp, with `edit` applied, written
 /// to `dir/scene.json`.
 fn write_scene(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    write_scene_as(dir, "scene.json", edit);
+}
+
+/// [`write_scene`] under the name `name`.
+fn write_scene_as(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
@@ -34,7 +39,7 @@ fn write_scene(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
     v["camera"]["height"] = 16.into();
     v["spp"] = 4.into();
     edit(&mut v);
-    std::fs::write(dir.join("scene.json"), v.to_string()).unwrap();
+    std::fs::write(dir.join(name), v.to_string()).unwrap();
 }
 
 /// The sorted channel names of an EXR file, and its size.
@@ -427,19 +432,116 @@ fn bad_parameters_exit_2_without_output() {
         &run(&dir, &["fd", "scene.json", "--param", "ball.radios"]),
         "ball.radius",
     );
-    // A step that makes the radius negative.
+    // A step that makes the radius negative: the message names the step, both values and the file.
+    let out = run(
+        &dir,
+        &["fd", "scene.json", "--param", "ball.radius", "--h", "2"],
+    );
+    assert_failure(
+        &out,
+        "--h 2 takes ball.radius = 1 to 3 and -1: scene.json: ball.radius",
+    );
+    // A negative step is a value, not a flag.
     assert_failure(
         &run(
             &dir,
-            &["fd", "scene.json", "--param", "ball.radius", "--h", "2"],
+            &["fd", "scene.json", "--param", "ball.radius", "--h", "-0.01"],
         ),
-        "radius",
+        "expected a finite number > 0, got \"-0.01\"",
     );
-    // Derivatives through a box filter are refused by the library.
+    // Derivatives through a box filter are refused by the library, naming the file and field.
     assert_failure(
         &run(&dir, &["diff", "box.json", "--param", "ball.radius"]),
-        "box",
+        "box.json: camera.filter: the interior term with the box filter",
     );
+    // Outputs must carry their format's extension.
+    assert_failure(
+        &run(
+            &dir,
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--out",
+                "p.txt",
+            ],
+        ),
+        "--out p.txt: must end in .exr",
+    );
+    assert_failure(
+        &run(&dir, &["render", "scene.json", "--png", "p.exr"]),
+        "--png p.exr: must end in .png",
+    );
+    // --set: unknown names, out-of-range and malformed values.
+    for (set, expected) in [
+        ("ball.radios=1", "ball.radius"),
+        (
+            "ball.radius=-1",
+            "--set ball.radius=-1: scene.json: ball.radius: must be > 0, got -1",
+        ),
+        ("ball.radius", "expected NAME=VALUE"),
+        ("ball.radius=nan", "is not a finite number"),
+    ] {
+        assert_failure(
+            &run(&dir, &["render", "scene.json", "--set", set]),
+            expected,
+        );
+    }
     assert_eq!(outputs(&dir, &inputs), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--set NAME=VALUE` renders what editing the scene file renders, bit for bit.
+#[test]
+fn set_overrides_a_parameter_like_the_file() {
+    let dir = workdir("set");
+    write_scene(&dir, |_| {});
+    write_scene_as(&dir, "edited.json", |v| {
+        v["shapes"][0]["sdf"]["radius"] = 0.7.into()
+    });
+    let set = run(
+        &dir,
+        &[
+            "render",
+            "scene.json",
+            "--spp",
+            "2",
+            "--set",
+            "ball.radius=0.7",
+            "--out",
+            "set.exr",
+            "--png",
+            "set.png",
+        ],
+    );
+    assert!(
+        set.status.success(),
+        "{}",
+        String::from_utf8_lossy(&set.stderr)
+    );
+    let edited = run(
+        &dir,
+        &[
+            "render",
+            "edited.json",
+            "--spp",
+            "2",
+            "--out",
+            "edited.exr",
+            "--png",
+            "edited.png",
+        ],
+    );
+    assert!(
+        edited.status.success(),
+        "{}",
+        String::from_utf8_lossy(&edited.stderr)
+    );
+    let plain = run(&dir, &["render", "scene.json", "--spp", "2"]);
+    assert!(plain.status.success());
+    let read = |f: &str| implicit_psdr::film::read_exr(&dir.join(f)).unwrap().2;
+    assert_eq!(read("set.exr"), read("edited.exr"));
+    assert_ne!(read("set.exr"), read("out.exr"));
     std::fs::remove_dir_all(&dir).unwrap();
 }

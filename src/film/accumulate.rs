@@ -70,6 +70,20 @@ pub enum Normalization {
     Differentiable,
 }
 
+impl std::str::FromStr for Normalization {
+    type Err = String;
+    /// `"fixed"` or `"differentiable"`.
+    fn from_str(text: &str) -> Result<Self, String> {
+        match text {
+            "fixed" => Ok(Normalization::Fixed),
+            "differentiable" => Ok(Normalization::Differentiable),
+            _ => Err(format!(
+                "unknown normalization {text:?} (expected fixed or differentiable)"
+            )),
+        }
+    }
+}
+
 impl Normalization {
     /// The derivative of a pixel from the derivatives `df` of `F` and `dw` of `W` and the pixel's value
     /// `i`: `df` (`Fixed`), or `∂(F/W) = df − i·dw` at `W = 1` (`Differentiable`, supplemental §3,

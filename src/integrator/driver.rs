@@ -37,6 +37,26 @@ impl RenderStats {
         }
     }
 
+    /// What a user should hear about, one line each (none for a clean render): rays that ran out of
+    /// sphere-tracing steps, non-finite samples and derivatives with the first of them.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        if self.exhausted_rays > 0 {
+            lines.push(format!(
+                "{} rays ran out of sphere-tracing steps and were treated as misses",
+                self.exhausted_rays
+            ));
+        }
+        if let Some(first) = &self.first_invalid {
+            lines.push(format!(
+                "{} non-finite samples (counted as black) and {} non-finite derivatives (counted \
+                 as 0); the first: {first}",
+                self.invalid_samples, self.invalid_derivatives
+            ));
+        }
+        lines
+    }
+
     /// Counts an invalid sample (`derivative`: a non-finite derivative of a finite sample), keeping
     /// `describe()`'s message if it is the first.
     pub fn invalid(&mut self, derivative: bool, describe: impl FnOnce() -> String) {

@@ -11,6 +11,7 @@ pub use json::{load, parse};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
+use crate::error::Result;
 use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};
@@ -226,6 +227,17 @@ impl Scene {
             finite_emitters,
             environment,
         }
+    }
+
+    /// The shape called `name`. Errors: no such shape (the message lists the scene's shapes).
+    pub fn shape_named(&self, name: &str) -> Result<&Shape> {
+        self.shapes.iter().find(|s| s.name == name).ok_or_else(|| {
+            let names: Vec<&str> = self.shapes.iter().map(|s| s.name.as_str()).collect();
+            crate::Error::Unsupported(format!(
+                "no shape named {name:?} (shapes: {})",
+                names.join(", ")
+            ))
+        })
     }
 
     /// The shapes whose surface may have crease edges, as `(shape name, reason)` ([`Sdf::creases`]): the
