@@ -32,6 +32,7 @@ pub mod interval;
 mod npy;
 mod primitives;
 mod transform;
+mod validate;
 
 pub use bake::{bake, bake_dims};
 pub use creases::surfaces_may_meet;
