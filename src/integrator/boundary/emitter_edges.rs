@@ -169,19 +169,17 @@ impl EmitterOutlines {
                     e2,
                     sphere_centre,
                     sphere_radius,
-                }) => {
-                    if !frustum.misses_ball(sphere_centre, sphere_radius) {
-                        pieces.push(Piece::Circle {
-                            emitter: e,
-                            centre,
-                            radius,
-                            e1,
-                            e2,
-                            sphere_centre,
-                        });
-                    }
+                }) if !frustum.misses_ball(sphere_centre, sphere_radius) => {
+                    pieces.push(Piece::Circle {
+                        emitter: e,
+                        centre,
+                        radius,
+                        e1,
+                        e2,
+                        sphere_centre,
+                    });
                 }
-                None => {}
+                Some(Outline::Circle { .. }) | None => {}
             }
         }
         pieces.retain(|p| p.length() > 0.0 && p.length().is_finite());
