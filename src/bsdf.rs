@@ -1,5 +1,6 @@
 //! Surface scattering. Directions point away from the surface; `n` is the outward unit normal.
 
+use crate::error::{Error, FieldPath, RGB};
 use crate::math::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{Frame, Vec3};
 use crate::scalar::{Param3, Scalar};
@@ -25,6 +26,25 @@ pub struct BsdfSample {
 }
 
 impl Bsdf {
+    /// The broken rules of the BSDF's fields (an albedo in `[0, 1]`), named by `at`; empty when valid.
+    pub fn validate(&self, at: FieldPath) -> Vec<Error> {
+        let mut out = Vec::new();
+        match self {
+            Bsdf::Diffuse { albedo } => {
+                let ok = |x: f32| (0.0..=1.0).contains(&x);
+                at.check_each(
+                    &mut out,
+                    "albedo",
+                    &RGB,
+                    albedo.value(),
+                    ok,
+                    "must be in [0, 1]",
+                );
+            }
+        }
+        out
+    }
+
     /// `f(wi, wo)` (without the cosine), generic.
     ///
     /// The side test looks at primal values only: the jump of `f` where `wi` crosses the tangent plane is

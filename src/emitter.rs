@@ -1,5 +1,10 @@
 //! Light sources: a one-sided rectangle, a sphere and a constant environment.
+//!
+//! Everything that depends on the kind of emitter lives here (sampling, intersection, how a point on it
+//! moves with its parameters, its outline, the scene rules on its fields), so a new kind is added in
+//! this file and the scene parser rather than in every consumer.
 
+use crate::error::{Error, FieldPath, RGB, XYZ};
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
 use crate::math::{Aabb, Frame, Ray, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
@@ -52,6 +57,65 @@ pub struct EmitterSample {
     pub pdf: f32,
 }
 
+/// The primal geometry of a finite emitter (derivatives dropped), for code that only looks at it.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Geometry {
+    /// A one-sided rectangle.
+    Rectangle {
+        /// Centre.
+        center: glam::Vec3,
+        /// Unit normal: the side that emits.
+        normal: glam::Vec3,
+        /// Unit first edge direction.
+        u: glam::Vec3,
+        /// Unit second edge direction, `normal × u`.
+        v: glam::Vec3,
+        /// Edge lengths along `u` and `v`.
+        size: [f32; 2],
+    },
+    /// A sphere.
+    Sphere {
+        /// Centre.
+        center: glam::Vec3,
+        /// Radius.
+        radius: f32,
+    },
+}
+
+/// The outline of a finite emitter seen from an eye point (see [`Emitter::outline`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Outline {
+    /// A rectangle's four edges `(a, b, outward)`, going round it; `outward` (unit) points off the
+    /// rectangle in its plane.
+    Edges {
+        /// The rectangle's unit normal.
+        normal: glam::Vec3,
+        /// The edges.
+        edges: [(glam::Vec3, glam::Vec3, glam::Vec3); 4],
+    },
+    /// A sphere's silhouette circle `centre + radius (cos θ e1 + sin θ e2)`.
+    Circle {
+        /// Centre of the circle.
+        centre: glam::Vec3,
+        /// Radius of the circle.
+        radius: f32,
+        /// First unit axis of the circle's plane.
+        e1: glam::Vec3,
+        /// Second unit axis of the circle's plane.
+        e2: glam::Vec3,
+        /// Centre of the sphere.
+        sphere_centre: glam::Vec3,
+        /// Radius of the sphere.
+        sphere_radius: f32,
+    },
+}
+
+/// A rectangle's second edge direction `v = normal × u`, the one place it is defined.
+#[inline]
+fn second_edge(normal: glam::Vec3, u: glam::Vec3) -> glam::Vec3 {
+    normal.cross(u)
+}
+
 /// Below this `sin² θmax` the cone around a far sphere is too thin for `f32` (pbrt-v4 uses the same
 /// threshold, sin² 1.5°): `1 − cos θmax` is then taken from its series `sin²/2 + sin⁴/8`.
 const THIN_CONE_SIN2: f32 = 0.000_685_23;
@@ -67,6 +131,168 @@ fn one_minus_cos_max(sin2: f32) -> f32 {
 }
 
 impl Emitter {
+    /// The emitted radiance.
+    pub fn radiance(&self) -> &Param3 {
+        match self {
+            Emitter::Rectangle { radiance, .. }
+            | Emitter::Sphere { radiance, .. }
+            | Emitter::Constant { radiance } => radiance,
+        }
+    }
+
+    /// The primal geometry of a finite emitter; `None` for the environment.
+    pub fn geometry(&self) -> Option<Geometry> {
+        match self {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u,
+                size,
+                ..
+            } => Some(Geometry::Rectangle {
+                center: center.value(),
+                normal: *normal,
+                u: *u,
+                v: second_edge(*normal, *u),
+                size: [size[0].value, size[1].value],
+            }),
+            Emitter::Sphere { center, radius, .. } => Some(Geometry::Sphere {
+                center: center.value(),
+                radius: radius.value,
+            }),
+            Emitter::Constant { .. } => None,
+        }
+    }
+
+    /// Whether a selected parameter (one with a derivative slot) moves or resizes the emitter; its
+    /// radiance does not.
+    pub fn geometry_selected(&self) -> bool {
+        let sel = |p: &Param| p.slot.is_some();
+        match self {
+            Emitter::Rectangle { center, size, .. } => {
+                center.c.iter().any(sel) || size.iter().any(sel)
+            }
+            Emitter::Sphere { center, radius, .. } => center.c.iter().any(sel) || sel(radius),
+            Emitter::Constant { .. } => false,
+        }
+    }
+
+    /// The point `p` of this finite emitter carried along by its parameters, generic: it keeps its
+    /// relative position (a rectangle's fractional coordinates along `u` and `v`, a sphere's direction
+    /// from the centre) as the emitter moves and scales. Returned with a generic quantity proportional
+    /// to the area (`a·b`, `r²`) whose derivative over its value is the area element's. `None` for the
+    /// environment, which has no points.
+    pub fn attach<S: Scalar>(&self, p: glam::Vec3) -> Option<(Vec3<S>, S)> {
+        match self {
+            Emitter::Rectangle {
+                center,
+                normal,
+                u,
+                size,
+                ..
+            } => {
+                let v = second_edge(*normal, *u);
+                let local = p - center.value();
+                let (a, b) = (size[0].value, size[1].value);
+                let (s, t) = (local.dot(*u) / a, local.dot(v) / b);
+                let (a_s, b_s) = (size[0].get::<S>(), size[1].get::<S>());
+                let x = center.get::<S>()
+                    + Vec3::constant(*u) * (a_s * s)
+                    + Vec3::constant(v) * (b_s * t);
+                Some((x, a_s * b_s))
+            }
+            Emitter::Sphere { center, radius, .. } => {
+                let r_s = radius.get::<S>();
+                let dir = (p - center.value()).normalize_or_zero();
+                let x = center.get::<S>() + Vec3::constant(dir) * r_s;
+                Some((x, r_s * r_s))
+            }
+            Emitter::Constant { .. } => None,
+        }
+    }
+
+    /// The outline of a finite emitter seen from `eye`: a rectangle's four edges, or a sphere's
+    /// silhouette circle. `None` for the environment, for a rectangle seen edge-on (the eye in its
+    /// plane, so it covers no area) or without area, and for a sphere seen from inside or on it.
+    pub fn outline(&self, eye: glam::Vec3) -> Option<Outline> {
+        match self.geometry()? {
+            Geometry::Rectangle {
+                center: c,
+                normal,
+                u,
+                v,
+                size,
+            } => {
+                let (ha, hb) = (0.5 * size[0], 0.5 * size[1]);
+                if !(ha > 0.0 && hb > 0.0) || (eye - c).dot(normal) == 0.0 {
+                    return None;
+                }
+                let corner = |s: f32, t: f32| c + u * (s * ha) + v * (t * hb);
+                Some(Outline::Edges {
+                    normal,
+                    edges: [
+                        (corner(-1.0, -1.0), corner(1.0, -1.0), -v),
+                        (corner(1.0, -1.0), corner(1.0, 1.0), u),
+                        (corner(1.0, 1.0), corner(-1.0, 1.0), v),
+                        (corner(-1.0, 1.0), corner(-1.0, -1.0), -u),
+                    ],
+                })
+            }
+            Geometry::Sphere {
+                center: o,
+                radius: r,
+            } => {
+                let to = o - eye;
+                let d = to.length();
+                if !(r > 0.0 && d > r && d.is_finite()) {
+                    return None;
+                }
+                let w = to / d;
+                let k = r / d;
+                let frame = Frame::from_normal(w);
+                Some(Outline::Circle {
+                    centre: o - w * (r * k),
+                    radius: r * (1.0 - k * k).max(0.0).sqrt(),
+                    e1: frame.to_world(glam::Vec3::X),
+                    e2: frame.to_world(glam::Vec3::Y),
+                    sphere_centre: o,
+                    sphere_radius: r,
+                })
+            }
+        }
+    }
+
+    /// The broken scene rules of the emitter's fields (a radiance `>= 0`, sizes and radius `> 0`),
+    /// named by `at` (the emitter's path or parameter prefix), in a fixed order; empty when valid.
+    ///
+    /// Directions (`normal`, `u`) are checked where they are read: they are not parameters.
+    pub fn validate(&self, at: FieldPath) -> Vec<Error> {
+        let mut out = Vec::new();
+        let radiance = self.radiance().value();
+        at.check_each(
+            &mut out,
+            "radiance",
+            &RGB,
+            radiance,
+            |x| x >= 0.0,
+            "must be >= 0",
+        );
+        match self {
+            Emitter::Rectangle { size, .. } => {
+                for (i, s) in size.iter().enumerate() {
+                    let field = at.element("size", i, &XYZ);
+                    at.check(&mut out, s.value > 0.0, field, "must be > 0", s.value);
+                }
+            }
+            Emitter::Sphere { radius, .. } => {
+                let r = radius.value;
+                at.check(&mut out, r > 0.0, at.field("radius"), "must be > 0", r);
+            }
+            Emitter::Constant { .. } => {}
+        }
+        out
+    }
+
     /// Surface area of a finite emitter (`∞` for the environment).
     pub fn area(&self) -> f32 {
         match self {
@@ -99,7 +325,7 @@ impl Emitter {
                     return None;
                 }
                 let local = ray.at(t) - c;
-                let v = normal.cross(*u);
+                let v = second_edge(*normal, *u);
                 let inside = local.dot(*u).abs() <= 0.5 * size[0].value
                     && local.dot(v).abs() <= 0.5 * size[1].value;
                 inside.then_some((t, *normal))
@@ -155,7 +381,7 @@ impl Emitter {
                 size,
                 ..
             } => {
-                let v = normal.cross(*eu);
+                let v = second_edge(*normal, *eu);
                 let (a, b) = (size[0].value, size[1].value);
                 let p = center.value() + *eu * ((u.x - 0.5) * a) + v * ((u.y - 0.5) * b);
                 let to = p - reference;
@@ -319,7 +545,7 @@ impl Emitter {
                 size,
                 ..
             } => {
-                let v = normal.cross(*u);
+                let v = second_edge(*normal, *u);
                 let half = (u.abs() * size[0].value + v.abs() * size[1].value) * 0.5;
                 Some(Aabb::around(center.value(), half))
             }

@@ -487,6 +487,72 @@ fn with_parameter_rejects_values_the_scene_file_would() {
 }
 
 #[test]
+fn with_parameter_and_the_parser_report_a_broken_rule_alike() {
+    // The same value, set by name or written in the file, breaks the same rule with the same words;
+    // only the field's naming differs (parameter name or JSON path).
+    let text = std::fs::read_to_string(scenes_dir().join("csg.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let scene = parse(&json).unwrap();
+    for (name, pointer, path, value) in [
+        (
+            "blob_sphere.radius",
+            "/shapes/0/sdf/children/0/radius",
+            "shapes[0].sdf.children[0].radius",
+            0.0,
+        ),
+        ("blob.k", "/shapes/0/sdf/k", "shapes[0].sdf.k", -0.1),
+        (
+            "ring.sdf.scale",
+            "/shapes/1/sdf/scale",
+            "shapes[1].sdf.scale",
+            -1.0,
+        ),
+        (
+            "ring.sdf.child.major_radius",
+            "/shapes/1/sdf/child/major_radius",
+            "shapes[1].sdf.child.major_radius",
+            0.2,
+        ),
+        (
+            "ring.sdf.child.minor_radius",
+            "/shapes/1/sdf/child/minor_radius",
+            "shapes[1].sdf.child.minor_radius",
+            -0.1,
+        ),
+        (
+            "blob_box.rounding",
+            "/shapes/0/sdf/children/1/rounding",
+            "shapes[0].sdf.children[1].rounding",
+            0.7,
+        ),
+        (
+            "bitten.children.0.half_size.y",
+            "/shapes/2/sdf/children/0/half_size/1",
+            "shapes[2].sdf.children[0].rounding",
+            0.1,
+        ),
+        (
+            "key.size.x",
+            "/emitters/0/size/0",
+            "emitters[0].size[0]",
+            0.0,
+        ),
+    ] {
+        let by_name = scene.with_parameter(name, value).unwrap_err().to_string();
+        let mut edited = json.clone();
+        *edited.pointer_mut(pointer).unwrap() = serde_json::json!(value);
+        let in_file = parse(&edited).unwrap_err().to_string();
+        let (field, rule) = in_file.split_once(": ").unwrap();
+        assert_eq!(field, path, "{in_file}");
+        assert_eq!(
+            by_name.split_once(": ").unwrap().1,
+            rule,
+            "{name}: {by_name} vs {in_file}"
+        );
+    }
+}
+
+#[test]
 fn with_parameter_at_the_current_value_changes_nothing() {
     for name in ["sphere_floor", "csg", "environment", "grid"] {
         let scene = example(name);

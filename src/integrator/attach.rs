@@ -19,7 +19,6 @@
 //! as constants (no Hessian).
 
 use super::path::{Anchor, Attach, Attached};
-use crate::emitter::Emitter;
 use crate::math::Vec3;
 use crate::scalar::{Param, Scalar, Slot};
 use crate::scene::{Scene, Shape};
@@ -329,16 +328,6 @@ fn geometry_selected(shape: &Shape) -> bool {
     any
 }
 
-/// Whether the position or size of an emitter has a selected parameter (its radiance does not move it).
-fn geometry_selected_emitter(emitter: &Emitter) -> bool {
-    let sel = |p: &Param| p.slot.is_some();
-    match emitter {
-        Emitter::Rectangle { center, size, .. } => center.c.iter().any(sel) || size.iter().any(sel),
-        Emitter::Sphere { center, radius, .. } => center.c.iter().any(sel) || sel(radius),
-        Emitter::Constant { .. } => false,
-    }
-}
-
 /// The [`Attach`] of the derivative pass: attached vertices of [`Scene`]'s shapes, emitters and camera
 /// with the scene's selected parameters (see the [module docs](self)).
 #[derive(Clone, Debug)]
@@ -359,7 +348,7 @@ impl<'a> SceneAttach<'a> {
             emitter_moves: scene
                 .emitters
                 .iter()
-                .map(|e| geometry_selected_emitter(&e.emitter))
+                .map(|e| e.emitter.geometry_selected())
                 .collect(),
         }
     }
@@ -405,40 +394,14 @@ impl<'a> SceneAttach<'a> {
         if !self.emitter_moves[e] {
             return constant;
         }
-        match &self.scene.emitters[e].emitter {
-            Emitter::Rectangle {
-                center,
-                normal,
-                u,
-                size,
-                ..
-            } => {
-                let v = normal.cross(*u);
-                let local = p - center.value();
-                let (a, b) = (size[0].value, size[1].value);
-                // Relative coordinates of the point, kept as the rectangle moves and scales.
-                let (s, t) = (local.dot(*u) / a, local.dot(v) / b);
-                let (a_s, b_s) = (size[0].get::<S>(), size[1].get::<S>());
-                let x = center.get::<S>()
-                    + Vec3::constant(*u) * (a_s * s)
-                    + Vec3::constant(v) * (b_s * t);
-                Attached {
-                    x: with_primal(x, p),
-                    n: Vec3::constant(n),
-                    j: unit_ratio(a_s * b_s),
-                }
-            }
-            Emitter::Sphere { center, radius, .. } => {
-                let r_s = radius.get::<S>();
-                let dir = (p - center.value()).normalize_or_zero();
-                let x = center.get::<S>() + Vec3::constant(dir) * r_s;
-                Attached {
-                    x: with_primal(x, p),
-                    n: Vec3::constant(n),
-                    j: unit_ratio(r_s * r_s),
-                }
-            }
-            Emitter::Constant { .. } => constant,
+        // How the point moves is the emitter's business; the Jacobian is its area's relative change.
+        match self.scene.emitters[e].emitter.attach::<S>(p) {
+            Some((x, area)) => Attached {
+                x: with_primal(x, p),
+                n: Vec3::constant(n),
+                j: unit_ratio(area),
+            },
+            None => constant,
         }
     }
 }

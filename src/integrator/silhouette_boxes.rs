@@ -88,28 +88,10 @@ pub fn silhouette_boxes(
             .into_iter()
             .partition(|b| depth == max_depth || b.extent().max_element() <= min_size);
         leaves.extend(leaf);
-        frontier = inner.iter().flat_map(octants).collect();
+        frontier = inner.iter().flat_map(Aabb::octants).collect();
         if frontier.is_empty() {
             break;
         }
     }
     Ok(leaves)
-}
-
-/// The eight octants of `b` (split at its centre).
-fn octants(b: &Aabb) -> [Aabb; 8] {
-    let c = b.center();
-    std::array::from_fn(|i| {
-        let pick = |bit: usize, k: usize| {
-            if i & bit == 0 {
-                (b.min[k], c[k])
-            } else {
-                (c[k], b.max[k])
-            }
-        };
-        let (x0, x1) = pick(1, 0);
-        let (y0, y1) = pick(2, 1);
-        let (z0, z1) = pick(4, 2);
-        Aabb::new(glam::Vec3::new(x0, y0, z0), glam::Vec3::new(x1, y1, z1))
-    })
 }

@@ -327,7 +327,7 @@ fn box_chords(
             out.push([crossings[0], crossings[1]]);
         }
         _ if splits > 0 => {
-            for child in octants(b) {
+            for child in b.octants() {
                 if classify_box(shape, eye, &child) == BoxClass::Kept {
                     box_chords(shape, eye, &child, options, splits - 1, out, stats);
                 }
@@ -424,24 +424,6 @@ fn refine_chord(
             out.push([a, e]);
         }
     }
-}
-
-/// The eight octants of `b`.
-fn octants(b: &Aabb) -> [Aabb; 8] {
-    let c = b.center();
-    std::array::from_fn(|i| {
-        let lo = Vec3::new(
-            if i & 1 == 0 { b.min.x } else { c.x },
-            if i & 2 == 0 { b.min.y } else { c.y },
-            if i & 4 == 0 { b.min.z } else { c.z },
-        );
-        let hi = Vec3::new(
-            if i & 1 == 0 { c.x } else { b.max.x },
-            if i & 2 == 0 { c.y } else { b.max.y },
-            if i & 4 == 0 { c.z } else { b.max.z },
-        );
-        Aabb::new(lo, hi)
-    })
 }
 
 /// Merges points closer than `tol` (hash grid of cell `tol`, neighbours searched).

@@ -56,6 +56,24 @@ impl Aabb {
     pub fn is_finite(&self) -> bool {
         self.min.is_finite() && self.max.is_finite()
     }
+    /// The eight octants of the box (split at its centre); octant `i` takes the upper half along x, y, z
+    /// when bit 0, 1, 2 of `i` is set.
+    pub fn octants(&self) -> [Aabb; 8] {
+        let c = self.center();
+        std::array::from_fn(|i| {
+            let pick = |bit: usize, k: usize| {
+                if i & bit == 0 {
+                    (self.min[k], c[k])
+                } else {
+                    (c[k], self.max[k])
+                }
+            };
+            let (x0, x1) = pick(1, 0);
+            let (y0, y1) = pick(2, 1);
+            let (z0, z1) = pick(4, 2);
+            Aabb::new(Vec3::new(x0, y0, z0), Vec3::new(x1, y1, z1))
+        })
+    }
     /// Centre of the box.
     #[inline]
     pub fn center(&self) -> Vec3 {
@@ -109,5 +127,19 @@ mod tests {
         assert_eq!(b.clip(&miss, 0.0, f32::INFINITY), None);
         let inside = Ray::new(Vec3::ZERO, Vec3::X);
         assert_eq!(b.clip(&inside, 0.0, 10.0), Some((0.0, 1.0)));
+    }
+
+    #[test]
+    fn octants_tile_the_box_by_index_bits() {
+        let b = Aabb::new(Vec3::new(0.0, -2.0, 4.0), Vec3::new(2.0, 2.0, 8.0));
+        let o = b.octants();
+        assert_eq!(o[0], Aabb::new(b.min, b.center()));
+        assert_eq!(o[7], Aabb::new(b.center(), b.max));
+        assert_eq!(
+            o[0b101],
+            Aabb::new(Vec3::new(1.0, -2.0, 6.0), Vec3::new(2.0, 0.0, 8.0))
+        );
+        let volume = |a: &Aabb| a.extent().x * a.extent().y * a.extent().z;
+        assert_eq!(o.iter().map(volume).sum::<f32>(), volume(&b));
     }
 }

@@ -13,7 +13,7 @@ use super::{NamedEmitter, Scene, Shape};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::error::{Error, Result};
+use crate::error::{Error, FieldPath, Result};
 use crate::film::Filter;
 use crate::scalar::{Param, Param3};
 use crate::sdf::{GridData, Sdf, read_npy};
@@ -398,34 +398,10 @@ fn fmt3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
-fn positive(x: f32, path: &str) -> Result<f32> {
-    if x > 0.0 {
-        Ok(x)
-    } else {
-        Err(Error::field(path, format!("must be > 0, got {x}")))
-    }
-}
-
-fn positive3(v: Vec3, path: &str) -> Result<Vec3> {
-    if v.cmpgt(Vec3::ZERO).all() {
-        Ok(v)
-    } else {
-        Err(Error::field(
-            path,
-            format!("every component must be > 0, got {}", fmt3(v)),
-        ))
-    }
-}
-
-fn in_range(x: f32, lo: f32, hi: f32, path: &str) -> Result<f32> {
-    if (lo..=hi).contains(&x) {
-        Ok(x)
-    } else {
-        Err(Error::field(
-            path,
-            format!("must be in [{lo}, {hi}], got {x}"),
-        ))
-    }
+/// The first of the broken rules a type's `validate` reports (in its order), as the parse error. The
+/// rules live on the types because parameter updates check them too.
+fn valid(broken: Vec<Error>) -> Result<()> {
+    broken.into_iter().next().map_or(Ok(()), Err)
 }
 
 impl Context<'_> {
@@ -546,6 +522,7 @@ impl Context<'_> {
             self.name(name, o.at("name"))?;
         }
         let node = self.sdf_node(ty, &o)?;
+        valid(node.validate(FieldPath::Json(&o.path)))?;
         // The name is kept (as a wrapper that delegates everything) because parameter names key on it.
         Ok(match name {
             Some(name) => Sdf::named(name, node),
@@ -553,57 +530,37 @@ impl Context<'_> {
         })
     }
 
-    /// The node of type `ty` read from `o` (its keys already checked), without its name.
+    /// The node of type `ty` read from `o` (its keys already checked), without its name; its field
+    /// rules are not checked yet.
     fn sdf_node(&mut self, ty: &str, o: &Obj) -> Result<Sdf> {
         let p3 = |x: Vec3| Param3::from(x);
         Ok(match ty {
             "sphere" => Sdf::Sphere {
                 center: p3(o.vec3("center")?),
-                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+                radius: o.f32("radius")?.into(),
             },
-            "box" => {
-                let half = positive3(o.vec3("half_size")?, &o.at("half_size"))?;
-                let rounding = o.opt_f32("rounding")?.unwrap_or(0.0);
-                let rounding = in_range(rounding, 0.0, half.min_element(), &o.at("rounding"))?;
-                Sdf::Box {
-                    center: p3(o.vec3("center")?),
-                    half_size: p3(half),
-                    rounding: rounding.into(),
-                }
-            }
-            "torus" => {
-                let minor = positive(o.f32("minor_radius")?, &o.at("minor_radius"))?;
-                let major = o.f32("major_radius")?;
-                if major <= minor {
-                    return Err(Error::field(
-                        o.at("major_radius"),
-                        format!("must be > minor_radius ({minor}), got {major}"),
-                    ));
-                }
-                Sdf::Torus {
-                    center: p3(o.vec3("center")?),
-                    axis: o.direction("axis")?,
-                    major_radius: major.into(),
-                    minor_radius: minor.into(),
-                }
-            }
-            "cylinder" => {
-                let radius = positive(o.f32("radius")?, &o.at("radius"))?;
-                let half_height = positive(o.f32("half_height")?, &o.at("half_height"))?;
-                let rounding = o.opt_f32("rounding")?.unwrap_or(0.0);
-                let rounding = in_range(rounding, 0.0, radius.min(half_height), &o.at("rounding"))?;
-                Sdf::Cylinder {
-                    center: p3(o.vec3("center")?),
-                    axis: o.direction("axis")?,
-                    radius: radius.into(),
-                    half_height: half_height.into(),
-                    rounding: rounding.into(),
-                }
-            }
+            "box" => Sdf::Box {
+                center: p3(o.vec3("center")?),
+                half_size: p3(o.vec3("half_size")?),
+                rounding: o.opt_f32("rounding")?.unwrap_or(0.0).into(),
+            },
+            "torus" => Sdf::Torus {
+                center: p3(o.vec3("center")?),
+                axis: o.direction("axis")?,
+                major_radius: o.f32("major_radius")?.into(),
+                minor_radius: o.f32("minor_radius")?.into(),
+            },
+            "cylinder" => Sdf::Cylinder {
+                center: p3(o.vec3("center")?),
+                axis: o.direction("axis")?,
+                radius: o.f32("radius")?.into(),
+                half_height: o.f32("half_height")?.into(),
+                rounding: o.opt_f32("rounding")?.unwrap_or(0.0).into(),
+            },
             "capsule" => Sdf::Capsule {
                 a: p3(o.vec3("a")?),
                 b: p3(o.vec3("b")?),
-                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+                radius: o.f32("radius")?.into(),
             },
             "plane" => Sdf::Plane {
                 normal: o.direction("normal")?,
@@ -613,7 +570,7 @@ impl Context<'_> {
             "intersection" => Sdf::Intersection(self.children(o)?),
             "difference" => Sdf::Difference(self.children(o)?),
             "smooth_union" => {
-                let k = positive(o.f32("k")?, &o.at("k"))?;
+                let k = o.f32("k")?;
                 Sdf::SmoothUnion {
                     children: self.children(o)?,
                     k: k.into(),
@@ -641,7 +598,7 @@ impl Context<'_> {
 
     fn transform(&mut self, o: &Obj) -> Result<Sdf> {
         let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
-        let scale = positive(o.opt_f32("scale")?.unwrap_or(1.0), &o.at("scale"))?;
+        let scale = o.opt_f32("scale")?.unwrap_or(1.0);
         let (axis, angle) = match o.get("rotate") {
             None => (Vec3::Y, 0.0),
             Some(r) => {
@@ -717,14 +674,7 @@ impl Context<'_> {
         let o = Obj::new(v, path.to_string(), &allowed)?;
         let name = o.string("name")?;
         self.name(name, o.at("name"))?;
-        let radiance = o.vec3("radiance")?;
-        if !radiance.cmpge(Vec3::ZERO).all() {
-            return Err(Error::field(
-                o.at("radiance"),
-                format!("every component must be >= 0, got {}", fmt3(radiance)),
-            ));
-        }
-        let radiance = Param3::from(radiance);
+        let radiance = Param3::from(o.vec3("radiance")?);
         let emitter = match ty {
             "rectangle" => {
                 let normal = o.direction("normal")?;
@@ -746,14 +696,8 @@ impl Context<'_> {
                 let size_path = o.at("size");
                 let size = match size {
                     Value::Array(a) if a.len() == 2 => [
-                        positive(
-                            number(&a[0], &format!("{size_path}[0]"))?,
-                            &format!("{size_path}[0]"),
-                        )?,
-                        positive(
-                            number(&a[1], &format!("{size_path}[1]"))?,
-                            &format!("{size_path}[1]"),
-                        )?,
+                        number(&a[0], &format!("{size_path}[0]"))?,
+                        number(&a[1], &format!("{size_path}[1]"))?,
                     ],
                     other => {
                         return Err(Error::field(
@@ -772,12 +716,13 @@ impl Context<'_> {
             }
             "sphere" => Emitter::Sphere {
                 center: o.vec3("center")?.into(),
-                radius: positive(o.f32("radius")?, &o.at("radius"))?.into(),
+                radius: o.f32("radius")?.into(),
                 radiance,
             },
             "constant" => Emitter::Constant { radiance },
             _ => unreachable!("tag checked against EMITTER_TYPES"),
         };
+        valid(emitter.validate(FieldPath::Json(path)))?;
         Ok(NamedEmitter {
             name: name.to_string(),
             emitter,
@@ -872,16 +817,11 @@ fn bsdf(v: &Value, path: &str) -> Result<Bsdf> {
     Ok(match ty {
         "diffuse" => {
             let o = Obj::new(v, path.to_string(), &["type", "albedo"])?;
-            let albedo = o.vec3("albedo")?;
-            if !(albedo.cmpge(Vec3::ZERO).all() && albedo.cmple(Vec3::ONE).all()) {
-                return Err(Error::field(
-                    o.at("albedo"),
-                    format!("every component must be in [0, 1], got {}", fmt3(albedo)),
-                ));
-            }
-            Bsdf::Diffuse {
-                albedo: albedo.into(),
-            }
+            let bsdf = Bsdf::Diffuse {
+                albedo: o.vec3("albedo")?.into(),
+            };
+            valid(bsdf.validate(FieldPath::Json(path)))?;
+            bsdf
         }
         _ => unreachable!("tag checked against BSDF_TYPES"),
     })

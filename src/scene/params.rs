@@ -8,14 +8,9 @@ use super::{NamedEmitter, Scene, Shape};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::error::{Error, Result};
+use crate::error::{Error, FieldPath, RGB, Result, XYZ};
 use crate::scalar::{Param, Param3};
 use crate::sdf::Sdf;
-
-/// Component suffixes of a point or vector.
-const XYZ: [&str; 3] = ["x", "y", "z"];
-/// Component suffixes of a colour.
-const RGB: [&str; 3] = ["r", "g", "b"];
 
 /// How many near matches an unknown-name error lists.
 const MAX_SUGGESTIONS: usize = 3;
@@ -409,136 +404,40 @@ impl Scene {
         }
         for s in &self.shapes {
             sdf_violations(&s.sdf, &root_prefix(&s.name, &s.sdf), &mut out);
-            match &s.bsdf {
-                Bsdf::Diffuse { albedo } => {
-                    for (i, c) in RGB.iter().enumerate() {
-                        let v = albedo.c[i].value;
-                        if !(0.0..=1.0).contains(&v) {
-                            out.push(Error::field(
-                                format!("{}.albedo.{c}", s.name),
-                                format!("must be in [0, 1], got {v}"),
-                            ));
-                        }
-                    }
-                }
-            }
+            out.extend(s.bsdf.validate(FieldPath::Param(&s.name)));
         }
         for e in &self.emitters {
-            let name = &e.name;
-            let mut positive = |field: String, v: f32| {
-                if !is_positive(v) {
-                    out.push(Error::field(field, format!("must be > 0, got {v}")));
-                }
-            };
-            let radiance = match &e.emitter {
-                Emitter::Rectangle { size, radiance, .. } => {
-                    positive(format!("{name}.size.x"), size[0].value);
-                    positive(format!("{name}.size.y"), size[1].value);
-                    radiance
-                }
-                Emitter::Sphere {
-                    radius, radiance, ..
-                } => {
-                    positive(format!("{name}.radius"), radius.value);
-                    radiance
-                }
-                Emitter::Constant { radiance } => radiance,
-            };
-            for (i, c) in RGB.iter().enumerate() {
-                let v = radiance.c[i].value;
-                if !(0.0..).contains(&v) {
-                    out.push(Error::field(
-                        format!("{name}.radiance.{c}"),
-                        format!("must be >= 0, got {v}"),
-                    ));
-                }
-            }
+            out.extend(e.emitter.validate(FieldPath::Param(&e.name)));
         }
         out
     }
 }
 
-/// The scene file's rules for the nodes of the tree under `sdf` (prefix `prefix`), as in the parser.
+/// The scene file's rules ([`Sdf::validate`], which the parser applies too) for every node of the tree
+/// under `sdf` (prefix `prefix`), named as parameters.
 fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
-    let positive = |field: &str, v: f32, out: &mut Vec<Error>| {
-        if !is_positive(v) {
-            out.push(Error::field(
-                format!("{prefix}.{field}"),
-                format!("must be > 0, got {v}"),
-            ));
-        }
-    };
-    let in_range = |field: &str, v: f32, hi: f32, out: &mut Vec<Error>| {
-        if !(0.0..=hi).contains(&v) {
-            out.push(Error::field(
-                format!("{prefix}.{field}"),
-                format!("must be in [0, {hi}], got {v}"),
-            ));
-        }
-    };
+    out.extend(sdf.validate(FieldPath::Param(prefix)));
     match sdf {
-        Sdf::Sphere { radius, .. } | Sdf::Capsule { radius, .. } => {
-            positive("radius", radius.value, out)
-        }
-        Sdf::Box {
-            half_size,
-            rounding,
-            ..
-        } => {
-            for (i, c) in XYZ.iter().enumerate() {
-                positive(&format!("half_size.{c}"), half_size.c[i].value, out);
-            }
-            let min_half = half_size.value().min_element().max(0.0);
-            in_range("rounding", rounding.value, min_half, out);
-        }
-        Sdf::Torus {
-            major_radius,
-            minor_radius,
-            ..
-        } => {
-            let (major, minor) = (major_radius.value, minor_radius.value);
-            positive("minor_radius", minor, out);
-            if !is_positive(major - minor) {
-                out.push(Error::field(
-                    format!("{prefix}.major_radius"),
-                    format!("must be > minor_radius ({minor}), got {major}"),
-                ));
-            }
-        }
-        Sdf::Cylinder {
-            radius,
-            half_height,
-            rounding,
-            ..
-        } => {
-            positive("radius", radius.value, out);
-            positive("half_height", half_height.value, out);
-            let hi = radius.value.min(half_height.value).max(0.0);
-            in_range("rounding", rounding.value, hi, out);
-        }
-        Sdf::Plane { .. } | Sdf::Grid { .. } => {}
         Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
             for (i, c) in children.iter().enumerate() {
                 sdf_violations(c, &format!("{prefix}.children.{i}"), out);
             }
         }
-        Sdf::SmoothUnion { children, k } => {
+        Sdf::SmoothUnion { children, .. } => {
             for (i, c) in children.iter().enumerate() {
                 sdf_violations(c, &format!("{prefix}.children.{i}"), out);
             }
-            positive("k", k.value, out);
         }
-        Sdf::Transform { scale, child, .. } => {
-            positive("scale", scale.value, out);
-            sdf_violations(child, &format!("{prefix}.child"), out);
-        }
+        Sdf::Transform { child, .. } => sdf_violations(child, &format!("{prefix}.child"), out),
         Sdf::Named { name, child } => sdf_violations(child, name, out),
+        Sdf::Sphere { .. }
+        | Sdf::Box { .. }
+        | Sdf::Torus { .. }
+        | Sdf::Cylinder { .. }
+        | Sdf::Capsule { .. }
+        | Sdf::Plane { .. }
+        | Sdf::Grid { .. } => {}
     }
-}
-
-/// `v > 0`, false for NaN (the rules below must catch NaN, so they test what is allowed).
-fn is_positive(v: f32) -> bool {
-    v > 0.0
 }
 
 /// Up to [`MAX_SUGGESTIONS`] names close to `name`: by edit distance (at most a third of the name's

@@ -32,6 +32,7 @@ pub mod interval;
 mod npy;
 mod primitives;
 mod transform;
+mod validate;
 
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use creases::surfaces_may_meet;

@@ -5,8 +5,8 @@
 //!
 //! A finite emitter seen by the camera is an occluder like any shape: across the image of its outline
 //! the radiance jumps from the emitter's own side (its radiance, or 0 for a one-sided rectangle seen from
-//! behind: [`crate::emitter::Emitter::intersect`] blocks rays on both sides, [`Emitter::emitted`] is 0
-//! on the back) to the background. The outline is
+//! behind: [`crate::emitter::Emitter::intersect`] blocks rays on both sides,
+//! [`crate::emitter::Emitter::emitted`] is 0 on the back) to the background. The outline is
 //! - a **rectangle**'s four edges (the image of a planar convex polygon is the convex polygon of the
 //!   images of its corners, so every edge is on the boundary unless the rectangle is seen edge-on);
 //! - a **sphere**'s silhouette circle from the eye `c`: centre `o − (r²/d) ŵ`, radius `r √(1 − r²/d²)`
@@ -70,7 +70,7 @@ use super::{
     BACKGROUND_OFFSET_PIXELS, accumulate_samples, attached_first_vertex, background_offset,
     background_radiance, finite_splat, on_film, projection_jacobian, splat_on_film,
 };
-use crate::emitter::Emitter;
+use crate::emitter::Outline;
 use crate::film::Image;
 use crate::film::accumulate::SplatTile;
 use crate::integrator::attach::SceneAttach;
@@ -90,12 +90,13 @@ pub const EDGE_STREAM: u64 = 0xED6E_0F11;
 #[derive(Copy, Clone, Debug, PartialEq)]
 enum Piece {
     /// A straight part of a rectangle's edge from `a` to `b`, `outward` (unit) pointing off the emitter
-    /// in its plane.
+    /// in its plane, `normal` the rectangle's.
     Segment {
         emitter: usize,
         a: glam::Vec3,
         b: glam::Vec3,
         outward: glam::Vec3,
+        normal: glam::Vec3,
     },
     /// A sphere's silhouette circle: `centre + radius (cos θ e1 + sin θ e2)`.
     Circle {
@@ -126,6 +127,8 @@ pub struct OutlinePoint {
     pub tangent: glam::Vec3,
     /// Unit direction off the emitter (in a rectangle's plane; a sphere's normal).
     pub outward: glam::Vec3,
+    /// Unit normal of the emitter at the point (a rectangle's normal; a sphere's, as `outward`).
+    pub normal: glam::Vec3,
     /// Index of the emitter in [`Scene::emitters`].
     pub emitter: usize,
 }
@@ -146,31 +149,9 @@ impl EmitterOutlines {
         let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
         let mut pieces = Vec::new();
         for &e in &scene.finite_emitters {
-            match &scene.emitters[e].emitter {
-                Emitter::Rectangle {
-                    center,
-                    normal,
-                    u,
-                    size,
-                    ..
-                } => {
-                    let v = normal.cross(*u);
-                    let (ha, hb) = (0.5 * size[0].value, 0.5 * size[1].value);
-                    if !(ha > 0.0 && hb > 0.0) {
-                        continue;
-                    }
-                    let c = center.value();
-                    // Seen edge-on (the eye in its plane) the rectangle covers no area.
-                    if (eye - c).dot(*normal) == 0.0 {
-                        continue;
-                    }
-                    let corner = |s: f32, t: f32| c + *u * (s * ha) + v * (t * hb);
-                    for (a, b, outward) in [
-                        (corner(-1.0, -1.0), corner(1.0, -1.0), -v),
-                        (corner(1.0, -1.0), corner(1.0, 1.0), *u),
-                        (corner(1.0, 1.0), corner(-1.0, 1.0), v),
-                        (corner(-1.0, 1.0), corner(-1.0, -1.0), -*u),
-                    ] {
+            match scene.emitters[e].emitter.outline(eye) {
+                Some(Outline::Edges { normal, edges }) => {
+                    for (a, b, outward) in edges {
                         if let Some((a, b)) = frustum.clip(a, b)
                             && (b - a).length() > 0.0
                         {
@@ -179,31 +160,29 @@ impl EmitterOutlines {
                                 a,
                                 b,
                                 outward,
+                                normal,
                             });
                         }
                     }
                 }
-                Emitter::Sphere { center, radius, .. } => {
-                    let (o, r) = (center.value(), radius.value);
-                    let to = o - eye;
-                    let d = to.length();
-                    // From inside (or on) the sphere there is no outline.
-                    if !(r > 0.0 && d > r && d.is_finite()) || frustum.misses_ball(o, r) {
-                        continue;
-                    }
-                    let w = to / d;
-                    let k = r / d;
-                    let frame = crate::math::Frame::from_normal(w);
+                Some(Outline::Circle {
+                    centre,
+                    radius,
+                    e1,
+                    e2,
+                    sphere_centre,
+                    sphere_radius,
+                }) if !frustum.misses_ball(sphere_centre, sphere_radius) => {
                     pieces.push(Piece::Circle {
                         emitter: e,
-                        centre: o - w * (r * k),
-                        radius: r * (1.0 - k * k).max(0.0).sqrt(),
-                        e1: frame.to_world(glam::Vec3::X),
-                        e2: frame.to_world(glam::Vec3::Y),
-                        sphere_centre: o,
+                        centre,
+                        radius,
+                        e1,
+                        e2,
+                        sphere_centre,
                     });
                 }
-                Emitter::Constant { .. } => {}
+                Some(Outline::Circle { .. }) | None => {}
             }
         }
         pieces.retain(|p| p.length() > 0.0 && p.length().is_finite());
@@ -246,12 +225,14 @@ impl EmitterOutlines {
                 a,
                 b,
                 outward,
+                normal,
             } => {
                 let ab = b - a;
                 OutlinePoint {
                     x: a + ab * u[1],
                     tangent: ab.normalize(),
                     outward,
+                    normal,
                     emitter,
                 }
             }
@@ -265,10 +246,12 @@ impl EmitterOutlines {
             } => {
                 let (s, c) = (std::f32::consts::TAU * u[1]).sin_cos();
                 let x = centre + (e1 * c + e2 * s) * radius;
+                let outward = (x - sphere_centre).normalize_or_zero();
                 OutlinePoint {
                     x,
                     tangent: e2 * c - e1 * s,
-                    outward: (x - sphere_centre).normalize_or_zero(),
+                    outward,
+                    normal: outward,
                     emitter,
                 }
             }
@@ -451,12 +434,10 @@ fn sample<S: Directions>(
     }
     // Eq. (1): the outline point's film velocity relative to the background's.
     let fs = scene.camera.frame::<S>();
-    let n_e = match &scene.emitters[pt.emitter].emitter {
-        Emitter::Rectangle { normal, .. } => *normal,
-        _ => pt.outward,
-    };
-    let Some((ex, ey)) = film_velocity(&fs, attach.emitter_vertex::<S>(pt.emitter, x_b, n_e).x)
-    else {
+    let Some((ex, ey)) = film_velocity(
+        &fs,
+        attach.emitter_vertex::<S>(pt.emitter, x_b, pt.normal).x,
+    ) else {
         return;
     };
     // At infinity (or nothing): the fixed direction projected with the lifted frame.

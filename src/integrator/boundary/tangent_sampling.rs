@@ -59,7 +59,7 @@
 //! remainder), so steering changes neither the number of random dimensions per sample nor, with
 //! [`TangentSampling::Uniform`], the draws themselves (`θ = π u` as before).
 
-use crate::emitter::Emitter;
+use crate::emitter::{Emitter, Geometry};
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -157,117 +157,79 @@ fn luminance(rgb: Vec3) -> f32 {
     if l.is_finite() { l.max(0.0) } else { 0.0 }
 }
 
-/// The geometry of a finite emitter, in primal values.
-#[derive(Copy, Clone, Debug)]
-enum Target {
-    Rectangle {
-        center: Vec3,
-        normal: Vec3,
-        u: Vec3,
-        v: Vec3,
-        half: [f32; 2],
-    },
-    Sphere {
-        center: Vec3,
-        radius: f32,
-    },
-}
-
-impl Target {
-    fn of(emitter: &Emitter) -> Option<Target> {
-        match emitter {
-            Emitter::Rectangle {
-                center,
-                normal,
-                u,
-                size,
-                ..
-            } => Some(Target::Rectangle {
-                center: center.value(),
-                normal: *normal,
-                u: *u,
-                v: normal.cross(*u),
-                half: [0.5 * size[0].value, 0.5 * size[1].value],
-            }),
-            Emitter::Sphere { center, radius, .. } => Some(Target::Sphere {
-                center: center.value(),
-                radius: radius.value,
-            }),
-            Emitter::Constant { .. } => None,
+/// The arc of tangent lines at `x_B` (tangent plane normal `n`, frame `t1`, `t2`) that reach a finite
+/// emitter of geometry `g`; see [`emitter_interval`].
+fn interval(g: &Geometry, x_b: Vec3, t1: Vec3, t2: Vec3, n: Vec3) -> Option<Interval> {
+    let local = |p: Vec3| {
+        let q = p - x_b;
+        Vec2::new(q.dot(t1), q.dot(t2))
+    };
+    match *g {
+        Geometry::Rectangle {
+            center,
+            normal,
+            u,
+            v,
+            size,
+        } => {
+            let half = [0.5 * size[0], 0.5 * size[1]];
+            // Behind the emitting side, or a tangent plane parallel to the rectangle: no light.
+            let front = normal.dot(x_b - center);
+            if !(front > 0.0 && front.is_finite()) || normal.cross(n).length_squared() < 1e-10 {
+                return None;
+            }
+            let (a, b) = (u * half[0], v * half[1]);
+            let corners = [
+                center - a - b,
+                center + a - b,
+                center + a + b,
+                center - a + b,
+            ];
+            let s = corners.map(|p| n.dot(p - x_b));
+            let mut points = [Vec2::ZERO; 4];
+            let mut count = 0;
+            for i in 0..4 {
+                let j = (i + 1) % 4;
+                if s[i] == 0.0 {
+                    points[count] = local(corners[i]);
+                    count += 1;
+                } else if s[j] != 0.0 && (s[i] < 0.0) != (s[j] < 0.0) {
+                    let t = s[i] / (s[i] - s[j]);
+                    points[count] = local(corners[i] + (corners[j] - corners[i]) * t);
+                    count += 1;
+                }
+            }
+            // The chord's ends are the pair of points farthest apart in angle (more than two points
+            // only when corners lie on the plane: duplicates of the ends).
+            let mut best: Option<Interval> = None;
+            for i in 0..count {
+                for j in i + 1..count {
+                    if let Some(arc) = Interval::between(points[i], points[j])
+                        && best.is_none_or(|b| arc.width > b.width)
+                    {
+                        best = Some(arc);
+                    }
+                }
+            }
+            best
         }
-    }
-
-    fn interval(&self, x_b: Vec3, t1: Vec3, t2: Vec3, n: Vec3) -> Option<Interval> {
-        let local = |p: Vec3| {
-            let q = p - x_b;
-            Vec2::new(q.dot(t1), q.dot(t2))
-        };
-        match *self {
-            Target::Rectangle {
-                center,
-                normal,
-                u,
-                v,
-                half,
-            } => {
-                // Behind the emitting side, or a tangent plane parallel to the rectangle: no light.
-                let front = normal.dot(x_b - center);
-                if !(front > 0.0 && front.is_finite()) || normal.cross(n).length_squared() < 1e-10 {
-                    return None;
-                }
-                let (a, b) = (u * half[0], v * half[1]);
-                let corners = [
-                    center - a - b,
-                    center + a - b,
-                    center + a + b,
-                    center - a + b,
-                ];
-                let s = corners.map(|p| n.dot(p - x_b));
-                let mut points = [Vec2::ZERO; 4];
-                let mut count = 0;
-                for i in 0..4 {
-                    let j = (i + 1) % 4;
-                    if s[i] == 0.0 {
-                        points[count] = local(corners[i]);
-                        count += 1;
-                    } else if s[j] != 0.0 && (s[i] < 0.0) != (s[j] < 0.0) {
-                        let t = s[i] / (s[i] - s[j]);
-                        points[count] = local(corners[i] + (corners[j] - corners[i]) * t);
-                        count += 1;
-                    }
-                }
-                // The chord's ends are the pair of points farthest apart in angle (more than two points
-                // only when corners lie on the plane: duplicates of the ends).
-                let mut best: Option<Interval> = None;
-                for i in 0..count {
-                    for j in i + 1..count {
-                        if let Some(arc) = Interval::between(points[i], points[j])
-                            && best.is_none_or(|b| arc.width > b.width)
-                        {
-                            best = Some(arc);
-                        }
-                    }
-                }
-                best
+        Geometry::Sphere { center, radius } => {
+            let q = center - x_b;
+            if q.length_squared() <= radius * radius {
+                return None;
             }
-            Target::Sphere { center, radius } => {
-                let q = center - x_b;
-                if q.length_squared() <= radius * radius {
-                    return None;
-                }
-                let h = n.dot(q);
-                let r2 = radius * radius - h * h;
-                if !(r2 > 0.0 && r2.is_finite()) {
-                    return None;
-                }
-                let c = local(center);
-                let d2 = c.length_squared();
-                if d2 <= r2 {
-                    return Some(Interval::FULL);
-                }
-                let half = (r2 / d2).sqrt().min(1.0).asin();
-                Interval::new(c.y.atan2(c.x) - half, 2.0 * half)
+            let h = n.dot(q);
+            let r2 = radius * radius - h * h;
+            if !(r2 > 0.0 && r2.is_finite()) {
+                return None;
             }
+            let c = local(center);
+            let d2 = c.length_squared();
+            if d2 <= r2 {
+                return Some(Interval::FULL);
+            }
+            let half = (r2 / d2).sqrt().min(1.0).asin();
+            Interval::new(c.y.atan2(c.x) - half, 2.0 * half)
         }
     }
 }
@@ -276,7 +238,7 @@ impl Target {
 #[derive(Clone, Debug)]
 pub struct TangentSampler {
     /// Finite emitters with their luminance (empty for [`TangentSampling::Uniform`]).
-    targets: Vec<(Target, f32)>,
+    targets: Vec<(Geometry, f32)>,
     /// `luminance · π` of the environment (0 without one).
     environment: f32,
 }
@@ -296,16 +258,11 @@ impl TangentSampler {
         let mut environment = 0.0;
         if mode == TangentSampling::Steered {
             for emitter in emitters {
-                match emitter {
-                    Emitter::Rectangle { radiance, .. } | Emitter::Sphere { radiance, .. } => {
-                        let l = luminance(radiance.value());
-                        if let (true, Some(t)) = (l > 0.0, Target::of(emitter)) {
-                            targets.push((t, l));
-                        }
-                    }
-                    Emitter::Constant { radiance } => {
-                        environment += luminance(radiance.value()) * PI
-                    }
+                let l = luminance(emitter.radiance().value());
+                match emitter.geometry() {
+                    Some(g) if l > 0.0 => targets.push((g, l)),
+                    Some(_) => {}
+                    None => environment += l * PI,
                 }
             }
         }
@@ -321,7 +278,7 @@ impl TangentSampler {
         let mut arcs = Vec::new();
         let mut total = 0.0f32;
         for (target, l) in &self.targets {
-            if let Some(arc) = target.interval(x_b, t1, t2, n) {
+            if let Some(arc) = interval(target, x_b, t1, t2, n) {
                 let w = l * arc.width;
                 if w > 0.0 && w.is_finite() {
                     total += w;
@@ -409,7 +366,7 @@ pub fn emitter_interval(
     t2: Vec3,
     n: Vec3,
 ) -> Option<Interval> {
-    Target::of(emitter)?.interval(x_b, t1, t2, n)
+    interval(&emitter.geometry()?, x_b, t1, t2, n)
 }
 
 #[cfg(test)]
