@@ -10,10 +10,12 @@
 
 mod dual;
 mod dual_array;
+mod grad;
 pub mod rules;
 
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
+pub use grad::Grad;
 pub use num_dual::Dual32;
 
 use std::fmt::Debug;
