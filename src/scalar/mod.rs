@@ -11,6 +11,7 @@
 mod dual;
 mod dual_array;
 mod grad;
+pub mod interval;
 pub mod rules;
 
 pub use dual::{Dual2Vec3, DualVec3};
@@ -145,6 +146,21 @@ pub trait Scalar:
     #[inline]
     fn sqr(self) -> Self {
         self * self
+    }
+
+    /// `formula`'s dedicated enclosure of its value over the sets `args` if this is a set-valued type
+    /// (an [`interval::Enclosure`]); `None` for the point types, which evaluate the formula itself.
+    ///
+    /// Generic code asks this before branching on a primal value that varies over a set (see
+    /// [`interval::Enclose`]). The default is a constant `None`, so the point types run exactly the code
+    /// they would without the question.
+    #[inline(always)]
+    fn enclosure<F: interval::Enclose<N>, const N: usize>(
+        formula: &F,
+        args: [Self; N],
+    ) -> Option<Self> {
+        let _ = (formula, args);
+        None
     }
 }
 
