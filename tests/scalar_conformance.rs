@@ -376,7 +376,7 @@ fn check_enclosure<S: SetValued>() {
             }
         }
         // A set of width 2w around x (crossing no kink: the nearest is 0.05 away from a spicy input).
-        let w = 1e-3 * xf.abs().max(1.0).min(10.0);
+        let w = 1e-3 * xf.abs().clamp(1.0, 10.0);
         let wide = exprs(S::set(xf - w, xf + w));
         for t in [-1.0, -0.5, 0.0, 0.3, 1.0] {
             let xs = xf + t * w;
