@@ -2,13 +2,18 @@
 //!
 //! For each type and each "spicy" input (0, tiny, negative, large) it evaluates a list of expressions that
 //! together use every trait method and operator. Primal values must agree with `f32` (exactly for the
-//! in-project [`DualN`], whose primal path performs the same `f32` operations), and derivatives in every
-//! direction must agree with central differences of an `f64` evaluation of the same generic code (the
-//! local [`F64`] type). Further tests: a many-input expression where `DualN<8>` must give, slot by slot,
-//! what `Dual32` seeded in that input gives; the quotient rule; and finite derivatives at the guarded
-//! points (`safe_sqrt` at 0, `acos` at ±1, `atan2` at the origin).
+//! in-project [`DualN`] and [`Grad`], whose primal paths perform the same `f32` operations), and
+//! derivatives in every direction must agree with central differences of an `f64` evaluation of the same
+//! generic code (the local [`F64`] type); for [`Grad`]`<S>` that is the spatial direction and every
+//! direction of `S`, and the mixed partials (second differences). The set-valued types ([`Interval`],
+//! [`IntervalGrad`]) must enclose the reference values and derivatives, on points and on small sets, and
+//! be tight on points. Further tests: a many-input expression where `DualN<8>` must give, slot by slot,
+//! what `Dual32` seeded in that input gives; the quotient rule; finite derivatives at the guarded points
+//! (`safe_sqrt` at 0, `acos` at ±1, `atan2` at the origin); and `Grad` on an SDF, on and off its surface,
+//! against num-dual's spatial gradient.
 
-use implicit_psdr::scalar::{Dual2Vec3, Dual32, DualN, DualVec3, Scalar, Slot};
+use implicit_psdr::scalar::interval::{Interval, IntervalGrad};
+use implicit_psdr::scalar::{Dual2Vec3, Dual32, DualN, DualVec3, Grad, Scalar, Slot};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// Reference scalar: plain `f64`, used for central differences with a step far below `f32` resolution.
@@ -98,6 +103,10 @@ trait Directions: Scalar {
     const DIRS: usize;
     /// The derivative in direction `k`.
     fn d(self, k: usize) -> f32;
+    /// `x` seeded in direction `k` (a constant for `k >= DIRS`).
+    fn seed(x: f32, k: usize) -> Self {
+        Self::lift(x, Some(k as u16))
+    }
 }
 
 impl Directions for f32 {
@@ -141,6 +150,33 @@ impl<const N: usize> Directions for DualN<N> {
     const DIRS: usize = N;
     fn d(self, k: usize) -> f32 {
         self.eps[k]
+    }
+}
+
+/// Direction 0 is the spatial one (`g[0]`, seeded as `Grad::seed` seeds an axis); directions `1..` are
+/// those of `S`, carried by the value (scene parameters are constants in space).
+impl<S: Directions> Directions for Grad<S> {
+    const DIRS: usize = 1 + S::DIRS;
+    fn d(self, k: usize) -> f32 {
+        if k == 0 {
+            self.g[0].primal()
+        } else {
+            self.v.d(k - 1)
+        }
+    }
+    fn seed(x: f32, k: usize) -> Self {
+        let z = S::zero();
+        if k == 0 {
+            Grad {
+                v: S::constant(x),
+                g: [S::one(), z, z],
+            }
+        } else {
+            Grad {
+                v: S::seed(x, k - 1),
+                g: [z; 3],
+            }
+        }
     }
 }
 
@@ -207,7 +243,7 @@ fn check_type<S: Directions>(exact: bool) {
         let fd = reference_derivatives(x);
         // Every direction, plus one slot past the last (which must give a constant).
         for k in 0..=S::DIRS {
-            let values = exprs(S::lift(x, Some(k as u16)));
+            let values = exprs(S::seed(x, k));
             for (i, (v, &r)) in values.iter().zip(&reference).enumerate() {
                 let p = v.primal();
                 if exact {
@@ -229,7 +265,7 @@ fn check_type<S: Directions>(exact: bool) {
             }
         }
         // `detach` drops the derivative of its factor: d(detach(x) · x) = x.
-        let v = S::lift(x, Some(0)).detach() * S::lift(x, Some(0));
+        let v = S::seed(x, 0).detach() * S::seed(x, 0);
         assert_eq!(v.primal(), x * x);
         if S::DIRS > 0 {
             assert_eq!(v.d(0), x);
@@ -251,6 +287,119 @@ macro_rules! scalar_suite {
             check_type::<$t>($exact);
         }
     };
+    ($name:ident, $t:ty, enclosure) => {
+        #[test]
+        fn $name() {
+            check_enclosure::<$t>();
+        }
+    };
+}
+
+/// Set-valued scalars: a set of inputs, and read access to the enclosures.
+trait SetValued: Scalar {
+    /// The input set `[lo, hi]`, seeded in the spatial direction `x` if the type has derivatives.
+    fn set(lo: f64, hi: f64) -> Self;
+    /// The enclosure of the value.
+    fn value(self) -> Interval;
+    /// The enclosure of the derivative along the seeded direction, if the type has one.
+    fn derivative(self) -> Option<Interval>;
+}
+
+impl SetValued for Interval {
+    fn set(lo: f64, hi: f64) -> Self {
+        Interval::new(lo, hi)
+    }
+    fn value(self) -> Interval {
+        self
+    }
+    fn derivative(self) -> Option<Interval> {
+        None
+    }
+}
+
+impl SetValued for IntervalGrad {
+    fn set(lo: f64, hi: f64) -> Self {
+        IntervalGrad {
+            v: Interval::new(lo, hi),
+            g: [Interval::point(1.0), Interval::ZERO, Interval::ZERO],
+        }
+    }
+    fn value(self) -> Interval {
+        self.v
+    }
+    fn derivative(self) -> Option<Interval> {
+        Some(self.g[0])
+    }
+}
+
+/// `i` holds `v` up to `slack · max(|v|, 1)` (the `f64` reference is itself rounded).
+fn holds(i: Interval, v: f64, slack: f64) -> bool {
+    let t = slack * v.abs().max(1.0);
+    i.lo - t <= v && v <= i.hi + t
+}
+
+/// Checks a set-valued type: on each [`SPICY`] point, every expression's enclosure holds the `f64`
+/// reference value (and derivative) and is only a few ulps wide; on a small set around the point, it holds
+/// the reference at samples across the set.
+fn check_enclosure<S: SetValued>() {
+    for &x in &SPICY {
+        let xf = x as f64;
+        let fd = reference_derivatives(x);
+        let exact = exprs(F64(xf));
+        let point = exprs(S::set(xf, xf));
+        for (i, (e, r)) in point.iter().zip(&exact).enumerate() {
+            let v = e.value();
+            assert!(
+                holds(v, r.0, 1e-12),
+                "expr {i} at x = {x}: {v:?} misses {}",
+                r.0
+            );
+            assert!(
+                v.width() <= 1e-9 * r.0.abs().max(1.0),
+                "expr {i} at x = {x}: {v:?} is loose"
+            );
+            if let Some(d) = e.derivative() {
+                assert!(
+                    holds(d, fd[i], 1e-5),
+                    "expr {i} at x = {x}: ∂ {d:?} misses {}",
+                    fd[i]
+                );
+                // Beyond acos's clamp the derivative enclosure is the hull of the clamp's 0 and the
+                // unbounded interior derivative: sound, not tight.
+                let acos_clamped = i == 11 && (xf * 0.5).abs() >= 1.0;
+                if !acos_clamped {
+                    assert!(
+                        d.width() <= 1e-6 * fd[i].abs().max(1.0),
+                        "expr {i} at x = {x}: ∂ {d:?} is loose"
+                    );
+                }
+            }
+        }
+        // A set of width 2w around x (crossing no kink: the nearest is 0.05 away from a spicy input).
+        let w = 1e-3 * xf.abs().clamp(1.0, 10.0);
+        let wide = exprs(S::set(xf - w, xf + w));
+        for t in [-1.0, -0.5, 0.0, 0.3, 1.0] {
+            let xs = xf + t * w;
+            let r = exprs(F64(xs));
+            let h = 1e-6 * xs.abs().max(1.0);
+            let (rp, rm) = (exprs(F64(xs + h)), exprs(F64(xs - h)));
+            for (i, e) in wide.iter().enumerate() {
+                let v = e.value();
+                assert!(
+                    holds(v, r[i].0, 1e-12),
+                    "expr {i} on x = {x} ± {w} at {xs}: {v:?} misses {}",
+                    r[i].0
+                );
+                if let Some(d) = e.derivative() {
+                    let fd = (rp[i].0 - rm[i].0) / (2.0 * h);
+                    assert!(
+                        holds(d, fd, 1e-5),
+                        "expr {i} on x = {x} ± {w} at {xs}: ∂ {d:?} misses {fd}"
+                    );
+                }
+            }
+        }
+    }
 }
 
 scalar_suite!(f32_conforms, f32, exact = true);
@@ -261,6 +410,50 @@ scalar_suite!(dual32_conforms, Dual32, exact = false);
 scalar_suite!(dual_n1_conforms, DualN<1>, exact = true);
 scalar_suite!(dual_n3_conforms, DualN<3>, exact = true);
 scalar_suite!(dual_n8_conforms, DualN<8>, exact = true);
+scalar_suite!(grad_f32_conforms, Grad<f32>, exact = true);
+scalar_suite!(grad_dual_n2_conforms, Grad<DualN<2>>, exact = true);
+scalar_suite!(grad_dual32_conforms, Grad<Dual32>, exact = false);
+scalar_suite!(interval_encloses, Interval, enclosure);
+scalar_suite!(interval_grad_encloses, IntervalGrad, enclosure);
+
+/// `Grad<S>` seeded in space and in the first direction of `S` at once: `g[0]`'s derivative in that
+/// direction is the mixed partial, here `f''(x)`, against a second difference in `f64`. This is what the
+/// attached normals read (`∂π∇φ`); a rule whose local derivative were computed from primal values only
+/// would give 0 here.
+fn check_mixed_partials<S: Directions>() {
+    for &x in &SPICY {
+        // A step growing like √|x|: the oscillating entries need a short step at large |x|, the
+        // polynomial ones a step long enough that rounding of their large values stays small.
+        let h = 1e-3 * (x.abs() as f64).max(1.0).sqrt();
+        let at = |t: f64| exprs(F64(x as f64 + t));
+        let (hi, mid, lo) = (at(h), at(0.0), at(-h));
+        let z = S::zero();
+        let values = exprs(Grad {
+            v: S::seed(x, 0),
+            g: [S::one(), z, z],
+        });
+        for (i, v) in values.iter().enumerate() {
+            let want = (hi[i].0 - 2.0 * mid[i].0 + lo[i].0) / (h * h);
+            let first = (hi[i].0 - lo[i].0) / (2.0 * h);
+            let (d2, d1, dv) = (v.g[0].d(0) as f64, v.g[0].primal() as f64, v.v.d(0) as f64);
+            assert!(
+                close(d2, want, 2e-3),
+                "expr {i} at x = {x}: f'' {d2} vs {want}"
+            );
+            // Spatial and parameter directions see the same first derivative.
+            assert!(
+                close(d1, first, 1e-3) && close(dv, first, 1e-3),
+                "expr {i} at x = {x}"
+            );
+        }
+    }
+}
+
+#[test]
+fn grad_mixed_partials_match_second_differences() {
+    check_mixed_partials::<DualN<1>>();
+    check_mixed_partials::<Dual32>();
+}
 
 /// A shading-like function of eight inputs: a normal from three, a light direction from three, an albedo
 /// and a distance; cosine term, inverse-square falloff, an angle and a smooth exponential.
@@ -404,4 +597,66 @@ fn guarded_points_have_finite_derivatives() {
     let o = DualN::<2>::lift(0.0, Some(0)).atan2(DualN::<2>::lift(0.0, Some(1)));
     assert_eq!(o.re, 0.0);
     assert_eq!(o.eps, [0.0, 0.0]);
+}
+
+/// `Grad<S>` through a whole SDF (a smooth union of two spheres, the second one's centre a parameter):
+/// on the surface, at a point where the blend is active, far away and at a sphere's centre (where the
+/// distance's gradient is singular and `safe_sqrt` guards it), the gradient agrees with num-dual's spatial
+/// gradient and the mixed partial `∂π∇φ` with a central difference of that gradient.
+#[test]
+fn grad_on_an_sdf_matches_the_spatial_dual() {
+    use implicit_psdr::sdf::Sdf;
+    let scene = |cx: f32, select: bool| {
+        let mut b = Sdf::sphere([cx, 0.3, 0.0], 0.7);
+        if let (Sdf::Sphere { center, .. }, true) = (&mut b, select) {
+            center.c[0].slot = Some(0);
+        }
+        Sdf::smooth_union(vec![Sdf::sphere([0.0; 3], 1.0), b], 0.5)
+    };
+    // `Sdf::gradient` is num-dual's spatial gradient (`DualVec3`).
+    let spatial = |sdf: &Sdf, p: glam::Vec3| sdf.gradient(p).to_array();
+    let cx = 1.2;
+    let sdf = scene(cx, true);
+    let on_surface = glam::Vec3::new(1.0, 0.0, 0.0) * {
+        let (mut lo, mut hi) = (0.0f32, 4.0f32);
+        for _ in 0..60 {
+            let m = 0.5 * (lo + hi);
+            if sdf.eval_f32(glam::Vec3::new(m, 0.0, 0.0)) < 0.0 {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    for p in [
+        glam::Vec3::new(0.0, 1.0, 0.0),
+        on_surface,
+        glam::Vec3::new(0.6, 0.9, 0.2),
+        glam::Vec3::new(40.0, -30.0, 1e4),
+        glam::Vec3::new(1e-6, 0.0, -1e-6),
+        glam::Vec3::ZERO,
+    ] {
+        let r = sdf.eval::<Grad<DualN<1>>>(Grad::seed(p));
+        assert_eq!(r.v.re, sdf.eval_f32(p), "at {p}");
+        let g = spatial(&sdf, p);
+        let h = 1e-3;
+        let (gp, gm) = (
+            spatial(&scene(cx + h, false), p),
+            spatial(&scene(cx - h, false), p),
+        );
+        for i in 0..3 {
+            assert!(
+                close(r.g[i].re as f64, g[i] as f64, 1e-5),
+                "at {p}: ∇φ {:?} vs {g:?}",
+                r.g
+            );
+            let fd = (gp[i] as f64 - gm[i] as f64) / (2.0 * h as f64);
+            assert!(
+                close(r.g[i].eps[0] as f64, fd, 5e-3),
+                "at {p}: ∂π∇φ_{i} {} vs {fd}",
+                r.g[i].eps[0]
+            );
+        }
+    }
 }

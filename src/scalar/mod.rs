@@ -11,12 +11,15 @@
 mod directions;
 mod dual;
 mod dual_array;
+mod grad;
+pub mod interval;
 pub mod rules;
 
 pub(crate) use directions::dispatch_directions;
 pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
+pub use grad::Grad;
 pub use num_dual::Dual32;
 
 use std::fmt::Debug;
@@ -146,6 +149,21 @@ pub trait Scalar:
     #[inline]
     fn sqr(self) -> Self {
         self * self
+    }
+
+    /// `formula`'s dedicated enclosure of its value over the sets `args` if this is a set-valued type
+    /// (an [`interval::Enclosure`]); `None` for the point types, which evaluate the formula itself.
+    ///
+    /// Generic code asks this before branching on a primal value that varies over a set (see
+    /// [`interval::Enclose`]). The default is a constant `None`, so the point types run exactly the code
+    /// they would without the question.
+    #[inline(always)]
+    fn enclosure<F: interval::Enclose<N>, const N: usize>(
+        formula: &F,
+        args: [Self; N],
+    ) -> Option<Self> {
+        let _ = (formula, args);
+        None
     }
 }
 

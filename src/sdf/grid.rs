@@ -143,7 +143,8 @@ pub(super) fn eval<S: Scalar>(
 ) -> S {
     // Interval types take the certified path: a box may span several cells, which the primal branches
     // below (inside the grid box or not, which cell) cannot express.
-    if let Some(v) = super::interval::grid_dispatch(data, bmin, bmax, p) {
+    let node = super::interval::GridEnclosure { data, bmin, bmax };
+    if let Some(v) = S::enclosure(&node, [p.x, p.y, p.z]) {
         return v;
     }
     if !data.usable() {

@@ -9,7 +9,7 @@
 //!
 //! Layout: exact-distance primitives (`primitives.rs`), hard CSG and the cubic smooth union (`csg.rs`),
 //! similarity transforms (`transform.rs`), B-spline grids (`grid.rs`), `.npy` I/O (`npy.rs`) and baking
-//! any node onto a grid (`bake.rs`); interval enclosures of `φ` and `∇φ` over boxes (`interval.rs`, used for
+//! any node onto a grid (`bake.rs`); interval enclosures of `φ` and `∇φ` over boxes (`interval/`, used for
 //! certified culling). [`Sdf::Named`] only carries a node's name from the scene file (for
 //! parameter names) and delegates everything to its child.
 //!

@@ -1,0 +1,233 @@
+//! [`Grad`]`<S>`: a first-order dual number in the three spatial directions whose coefficients are
+//! themselves scalars `S`.
+//!
+//! Evaluating `φ` at a seeded point gives `φ` and `∇φ` as `S` values, i.e. together with their parameter
+//! derivatives: the mixed partials `∂π∇φ` that move the normal of an attached vertex
+//! ([`crate::integrator::attach`]). Scene parameters lift into the value (constants in space).
+//!
+//! Every elementary function takes its value and local derivative from [`super::rules`] evaluated in `S`
+//! (so the local derivative carries its own parameter derivatives) and applies the chain rule
+//! `g' = g · d` in each direction.
+
+use super::{Scalar, Slot, rules};
+use crate::math::Vec3;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A first-order dual number in the three spatial directions with coefficients in `S`: `v + Σ g_i ε_i`.
+/// Evaluating `φ` at a seeded point gives `φ` and `∇φ` as `S` values, i.e. with their parameter
+/// derivatives (mixed partials `∂π∇φ`). Scene parameters lift into `v` (constants in space).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Grad<S> {
+    /// The value.
+    pub v: S,
+    /// The spatial gradient.
+    pub g: [S; 3],
+}
+
+impl<S: Scalar> Grad<S> {
+    /// The point `p` seeded as the spatial variable: `p_i` has gradient `e_i`.
+    #[inline]
+    pub fn seed(p: glam::Vec3) -> Vec3<Self> {
+        let (z, o) = (S::zero(), S::one());
+        Vec3::new(
+            Self {
+                v: S::constant(p.x),
+                g: [o, z, z],
+            },
+            Self {
+                v: S::constant(p.y),
+                g: [z, o, z],
+            },
+            Self {
+                v: S::constant(p.z),
+                g: [z, z, o],
+            },
+        )
+    }
+
+    /// Applies a unary rule `(value, derivative)` (both in `S`) by the chain rule.
+    #[inline(always)]
+    fn chain(self, (v, d): (S, S)) -> Self {
+        Self {
+            v,
+            g: self.g.map(|g| g * d),
+        }
+    }
+
+    /// Applies a binary rule `(value, ∂/∂self, ∂/∂other)` by the chain rule.
+    #[inline(always)]
+    fn chain2(self, o: Self, (v, dx, dy): (S, S, S)) -> Self {
+        Self {
+            v,
+            g: std::array::from_fn(|i| dx * self.g[i] + dy * o.g[i]),
+        }
+    }
+}
+
+impl<S: Scalar> Add for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            v: self.v + o.v,
+            g: [self.g[0] + o.g[0], self.g[1] + o.g[1], self.g[2] + o.g[2]],
+        }
+    }
+}
+
+impl<S: Scalar> Sub for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            v: self.v - o.v,
+            g: [self.g[0] - o.g[0], self.g[1] - o.g[1], self.g[2] - o.g[2]],
+        }
+    }
+}
+
+impl<S: Scalar> Mul for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self.chain2(o, rules::mul(self.v, o.v))
+    }
+}
+
+#[allow(clippy::suspicious_arithmetic_impl)] // The factored quotient rule.
+impl<S: Scalar> Div for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        // The partials of `rules::div` are `(1/b, −(a/b)·(1/b))`; applied factored, `(a' − (a/b) b')/b`,
+        // which is the order the attached normals have always been computed in (they are compared bit for
+        // bit across versions).
+        let (q, inv, _) = rules::div(self.v, o.v);
+        Self {
+            v: q,
+            g: std::array::from_fn(|i| (self.g[i] - q * o.g[i]) * inv),
+        }
+    }
+}
+
+impl<S: Scalar> Neg for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self {
+            v: -self.v,
+            g: self.g.map(|g| -g),
+        }
+    }
+}
+
+impl<S: Scalar> Add<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, c: f32) -> Self {
+        Self {
+            v: self.v + c,
+            g: self.g,
+        }
+    }
+}
+
+impl<S: Scalar> Sub<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, c: f32) -> Self {
+        Self {
+            v: self.v - c,
+            g: self.g,
+        }
+    }
+}
+
+impl<S: Scalar> Mul<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, c: f32) -> Self {
+        Self {
+            v: self.v * c,
+            g: self.g.map(|g| g * c),
+        }
+    }
+}
+
+impl<S: Scalar> Div<f32> for Grad<S> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, c: f32) -> Self {
+        Self {
+            v: self.v / c,
+            g: self.g.map(|g| g / c),
+        }
+    }
+}
+
+macro_rules! assign_ops {
+    ($($tr:ident $f:ident $op:tt),*) => {$(
+        impl<S: Scalar> $tr for Grad<S> {
+            #[inline(always)]
+            fn $f(&mut self, o: Self) {
+                *self = *self $op o;
+            }
+        }
+    )*};
+}
+assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
+
+// `recip` and `sqr` keep the trait defaults (`1 / x` and `x · x` through the quotient and product rules):
+// the rule-table versions round differently in `S`.
+impl<S: Scalar> Scalar for Grad<S> {
+    #[inline(always)]
+    fn constant(v: f32) -> Self {
+        Self {
+            v: S::constant(v),
+            g: [S::zero(); 3],
+        }
+    }
+    #[inline(always)]
+    fn primal(self) -> f32 {
+        self.v.primal()
+    }
+    #[inline(always)]
+    fn lift(value: f32, slot: Slot) -> Self {
+        Self {
+            v: S::lift(value, slot),
+            g: [S::zero(); 3],
+        }
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        self.chain(rules::sqrt(self.v))
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        self.chain(rules::exp(self.v))
+    }
+    #[inline]
+    fn ln(self) -> Self {
+        self.chain(rules::ln(self.v))
+    }
+    #[inline]
+    fn sin(self) -> Self {
+        self.chain(rules::sin(self.v))
+    }
+    #[inline]
+    fn cos(self) -> Self {
+        self.chain(rules::cos(self.v))
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        self.chain2(x, rules::atan2(self.v, x.v))
+    }
+    #[inline]
+    fn acos(self) -> Self {
+        self.chain(rules::acos(self.v))
+    }
+    #[inline]
+    fn powf(self, n: f32) -> Self {
+        self.chain(rules::powf(self.v, n))
+    }
+}
