@@ -4,6 +4,10 @@
 //!
 //! Data flows one way: scene file ([`scene`]) → [`scene::Scene`] (stored in `f32`) → tracer ([`trace`],
 //! `f32`) → integrand in `S: Scalar` ([`integrator`], [`bsdf`], [`emitter`], [`camera`]) → [`film`] → EXR/PNG.
+//!
+//! Citations in the documentation: "docs/theory.md §k" is the theory as this repository states it
+//! (`docs/theory.md`, with numbered sections and equations); "supplemental §k, eq. m" is the
+//! supplemental document of Zhou et al. 2024, from which the equations are taken.
 #![warn(missing_docs)]
 
 pub mod bsdf;

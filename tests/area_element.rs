@@ -1,7 +1,7 @@
-//! `∂πJ = κV` (seed §1, Eq. 11), checked by automatic differentiation of the area element of the displaced
+//! `∂πJ = κV` (supplemental document of Zhou et al. 2024, §1, eq. 11), checked by automatic differentiation of the area element of the displaced
 //! surface, a construction that never uses the curvature formula.
 //!
-//! Seed §1 maps the reference surface `B = M` to the moving one by `x = χ(p, π) = p + π V(p) n(p)` (the
+//! Supplemental §1 maps the reference surface `B = M` to the moving one by `x = χ(p, π) = p + π V(p) n(p)` (the
 //! velocity `v` points along the normal, Eq. 8, with `V = n·v`), and Eqs. 9–11 conclude that the Jacobian
 //! `J` of that map (the area ratio, `J = 1` at `π = 0`) has `∂πJ = κV` with `κ = ∇·n` the total curvature
 //! (positive on convex surfaces: `φ < 0` inside, the gradient pointing out, the sign note after Eq. 8).

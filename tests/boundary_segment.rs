@@ -1,4 +1,4 @@
-//! Boundary-segment geometry (issue 4 item 6): the change of measure `J^B` against the numerical Jacobian
+//! Boundary-segment geometry (docs/theory.md §5.2): the change of measure `J^B` against the numerical Jacobian
 //! of the map `(x_B, θ_B) ↦ (x_S, x_D)`, and `V_∂` by AD against finite differences of the position of a
 //! shadow boundary.
 //!
@@ -204,13 +204,13 @@ struct Measures {
     area_jacobian: f64,
     /// `dA(x_S) dψ / (dA(x_B) dθ)`, `ψ` the angle swept by the direction from `x_S` (x_D at infinity).
     directional_jacobian: f64,
-    /// `dℓ(x_D)/dℓ(x_B)` with `x_S` fixed (the silhouette's arc length at `x_B`): seed eq. 15.
+    /// `dℓ(x_D)/dℓ(x_B)` with `x_S` fixed (the silhouette's arc length at `x_B`): supplemental eq. 15.
     fiber_ratio: f64,
-    /// `dℓ(x_D)` over the motion of `x_B` across the segment, `x_S` fixed: seed eq. 15 as written.
+    /// `dℓ(x_D)` over the motion of `x_B` across the segment, `x_S` fixed: supplemental eq. 15 as written.
     fiber_ratio_across: f64,
     /// Unit direction in which `x_B` moves with `x_S` fixed: the silhouette tangent.
     silhouette: glam::DVec3,
-    /// `dℓ_t(x_S)/dθ`: seed eq. 20.
+    /// `dℓ_t(x_S)/dθ`: supplemental eq. 20.
     dl_t_dtheta: f64,
     /// Unit direction of `∂x_S/∂θ` (the curve `c_t`).
     c_t: glam::DVec3,
@@ -414,7 +414,7 @@ fn jacobian_sphere() {
     let shape = Shape::new("ball", Sdf::sphere(c, 0.8), diffuse());
     let err = check_shape("sphere", &shape, 300, 1, |rng| c + rng.unit() * 0.8);
     assert_eq!(err.rejected_concave, 0, "a sphere is convex everywhere");
-    // On a sphere the silhouette is perpendicular to the ray: seed eq. 15 holds with the arc length too.
+    // On a sphere the silhouette is perpendicular to the ray: supplemental eq. 15 holds with the arc length too.
     assert!(err.eq15_vs_arc < 1e-3, "{err:?}");
 }
 

@@ -198,7 +198,7 @@ fn concave_tangent_directions() {
 /// radii). There the derivative is continuous but only `√ε`-regular in the offset `ε` (measured: the
 /// sum of d/d far.center.x is 16.6, 13.9 at −0.5, −0.1 px from tangency and −20.4, −63.9 at +0.1,
 /// +0.5 px, i.e. ≈ 13 − 106 √ε), so FD with any usable `h` (0.01 = 0.15 px) averages across the kink
-/// (it gives ≈ 0); the estimator there gave a sum of 25–27 against the limit ≈ 13 (report of issue 4).
+/// (it gives ≈ 0); the estimator there gave a sum of 25–27 against the limit ≈ 13 (measured when the term was written).
 #[test]
 fn two_silhouettes_on_a_camera_ray() {
     // The far centre's direction is offset by the near sphere's angular radius.

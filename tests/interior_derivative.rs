@@ -1,4 +1,4 @@
-//! The interior derivative (DESIGN.md §3): image unchanged, scalar types agree, linear parameters exact,
+//! The interior derivative (docs/theory.md §2): image unchanged, scalar types agree, linear parameters exact,
 //! geometric parameters against central finite differences with common random numbers, no NaN at
 //! grazing angles.
 //!
@@ -507,7 +507,7 @@ fn path_integrator_matches_finite_differences() {
     assert!(failures.is_empty(), "errors above 2σ + 0.02: {failures:?}");
 }
 
-/// Differentiable normalisation (seed §3): the same expectation away from silhouettes, where `W`'s
+/// Differentiable normalisation (supplemental §3): the same expectation away from silhouettes, where `W`'s
 /// primary boundary term vanishes; its noise is lower than `Fixed`'s on a moving camera.
 #[test]
 fn differentiable_normalization_matches_finite_differences() {

@@ -358,7 +358,7 @@ fn finite_background_matches_finite_differences() {
     }
 }
 
-/// `--normalization differentiable` (seed §3): the complete derivative `∂F − I ∂W`, with `W`'s own
+/// `--normalization differentiable` (supplemental §3): the complete derivative `∂F − I ∂W`, with `W`'s own
 /// primary term (`PrimaryTerm::coverage`), matches the same closed form as the fixed normalisation; without
 /// `W`'s primary term it is biased by `+I ∮ w v dℓ` (measured: 2.5 times the true ring sum; with it the
 /// sum is within 0.3% and the relative L2 0.055).

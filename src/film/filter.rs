@@ -199,7 +199,7 @@ impl Filter {
     }
 
     /// True if the filter is continuous, so film positions may move without pixel-edge boundary terms
-    /// (DESIGN §3: derivatives through a discontinuous filter need them).
+    /// (docs/theory.md §2.5: derivatives through a discontinuous filter need them).
     pub fn is_continuous(&self) -> bool {
         !matches!(self, Filter::Box)
     }

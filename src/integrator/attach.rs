@@ -1,9 +1,9 @@
-//! Attached vertices (DESIGN.md §3): the points of a path traced in `f32`, moved to first order with the
+//! Attached vertices (docs/theory.md §2.1–§2.3): the points of a path traced in `f32`, moved to first order with the
 //! scene parameters, in any [`Scalar`] type.
 //!
 //! - **Shape vertex** `p` (unit normal `n`): `φ_S = φ(p; π)` with lifted parameters gives the normal
 //!   velocity `V_S = −(φ_S − detach φ_S)/|∇φ(p)|` (primal zero), the position `x_S = p + V_S n` and the area
-//!   factor `J_S = 1 + κ(p) V_S` (`∂πJ = κV`, seed §1 eq. 11; `κ` primal only).
+//!   factor `J_S = 1 + κ(p) V_S` (`∂πJ = κV`, supplemental §1 eq. 11; `κ` primal only).
 //!   The normal moves with the surface: at the moving point, `∇φ(x(π); π) = ∇φ(p) + π (H ∂πx + ∂π∇φ)`, so
 //!   `n_S = normalize(∇φ_S(p) + (H n) V_S)`, `∂πn = (I − nnᵀ)(H n V' + ∂π∇φ)/|∇φ|`. `∇φ_S(p)` (the
 //!   gradient with lifted parameters) comes from one evaluation in [`Grad`]`<S>`, a spatial gradient dual

@@ -355,7 +355,7 @@ pub enum Anchor {
 }
 
 /// A recorded vertex in scalar type `S`: its position, unit normal and area factor `J` (the density of
-/// the vertex is per unit area of the reference surface, DESIGN §3, so the contribution carries `J`).
+/// the vertex is per unit area of the reference surface, docs/theory.md §2.4, so the contribution carries `J`).
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Attached<S> {
     /// Position.

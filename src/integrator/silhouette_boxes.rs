@@ -1,8 +1,8 @@
 //! Certified culling for the primary boundary: boxes that may hold a silhouette point seen from the camera.
 //!
 //! Seen from the camera centre `c`, the silhouette (contour generator) of a shape is the curve
-//! `{φ = 0, ψ = 0}` with `ψ(x) = ∇φ(x)·(c − x)`: surface points whose tangent plane holds the eye (DESIGN §3,
-//! "Boundary integrals"; seed §2). An octree over the shape's bounds discards a box `B` when interval
+//! `{φ = 0, ψ = 0}` with `ψ(x) = ∇φ(x)·(c − x)`: surface points whose tangent plane holds the eye (docs/theory.md
+//! §4.2; supplemental §2). An octree over the shape's bounds discards a box `B` when interval
 //! arithmetic proves `0 ∉ φ(B)` (no surface) or `0 ∉ ψ(B)` (surface, but no silhouette), with
 //! `ψ(B) ⊂ Σ_k ∇_kφ(B) · (c_k − B_k)` from [`IntervalGrad`] enclosures of the gradient
 //! ([`crate::sdf::interval`]). Every silhouette point lies in a returned box; the boxes around a curve

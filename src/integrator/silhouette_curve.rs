@@ -1,8 +1,8 @@
 //! The silhouette curve inside the certified boxes, as a polyline of curve points, and sampling on it with an
 //! exact density.
 //!
-//! Seen from the camera centre `c`, the silhouette is `{φ = 0, ψ = 0}` with `ψ(x) = ∇φ(x)·(c − x)` (DESIGN §3,
-//! seed §2); its gradients are `∇φ` and `∇ψ = H(c − x) − ∇φ`, `H` the Hessian of `φ`. Where they are
+//! Seen from the camera centre `c`, the silhouette is `{φ = 0, ψ = 0}` with `ψ(x) = ∇φ(x)·(c − x)` (docs/theory.md §4.2,
+//! supplemental §2); its gradients are `∇φ` and `∇ψ = H(c − x) − ∇φ`, `H` the Hessian of `φ`. Where they are
 //! independent the curve is smooth with unit tangent `T = ∇φ × ∇ψ / |∇φ × ∇ψ|`.
 //!
 //! **Extraction.** [`silhouette_boxes`] gives boxes certified to hold every curve point. In each box the curve

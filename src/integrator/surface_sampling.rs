@@ -1,4 +1,4 @@
-//! Area sampling of an implicit surface with an exact density, as Zhou et al. (2024) do it (DESIGN.md §3,
+//! Area sampling of an implicit surface with an exact density, as Zhou et al. (2024) do it (docs/theory.md §5.3,
 //! secondary boundary): lines through the shape's bounding box along a coordinate axis, **every** crossing
 //! with the surface kept, the three axes combined by multiple importance sampling.
 //!

@@ -1,4 +1,4 @@
-//! Which nodes have crease edges (DESIGN.md §3 "Creases"): curves where the surface normal jumps. A
+//! Which nodes have crease edges (docs/theory.md §7): curves where the surface normal jumps. A
 //! crease seen from the camera or from a light is a boundary curve of its own (its image moves with the
 //! parameters, and the visibility jumps across it), which the silhouette-based boundary terms do not
 //! sample. Where a derivative is requested through a creased shape, the caller must warn that those terms

@@ -1,7 +1,7 @@
 //! Constructive solid geometry: hard union, intersection and difference (min / max), and the smooth union.
 //!
 //! Hard CSG branches on primal values: at the switching surface (`φ_a = φ_b`) the result has a crease
-//! whose derivative the branch does not see; those creases need their own boundary terms (DESIGN §3,
+//! whose derivative the branch does not see; those creases need their own boundary terms (docs/theory.md §7,
 //! "Creases"). The smooth union has none.
 
 use super::Sdf;

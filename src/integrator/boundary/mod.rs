@@ -1,8 +1,8 @@
-//! Boundary terms of the derivative (DESIGN.md §3 "Boundary integrals"): visibility along a segment jumps
+//! Boundary terms of the derivative (docs/theory.md §3): visibility along a segment jumps
 //! where the segment touches a surface tangentially.
 //!
 //! [`segment`] holds the geometry of one boundary segment `(x_S, x_B, x_D)`: the measure changes
-//! (`J^B`, seed §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, seed eq. 15), the silhouette test, and the
+//! (`J^B`, supplemental §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, supplemental eq. 15), the silhouette test, and the
 //! normal velocity `V_∂` of the discontinuity curve by AD. [`secondary`] estimates the secondary
 //! boundary term (shadows, on every segment of a path after the first) with them, its tangent angles
 //! steered towards the emitters by [`tangent_sampling`] and [`subpaths`] estimating the camera and

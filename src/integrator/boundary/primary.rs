@@ -1,4 +1,4 @@
-//! The primary boundary term (DESIGN.md §3 "Boundary integrals", seed §2 with `x_S = c` the camera
+//! The primary boundary term (docs/theory.md §4; supplemental §2 with `x_S = c` the camera
 //! centre): silhouettes of shapes seen from the camera, for both integrators.
 //!
 //! # The integral, in film space
@@ -51,7 +51,7 @@
 //!
 //! averaged over the `N` samples of the whole image (own random stream [`PRIMARY_STREAM`]).
 //!
-//! # Pixel normalisation (seed §3)
+//! # Pixel normalisation (supplemental §3; docs/theory.md §6)
 //!
 //! With `differentiable` normalisation pixel `j` is `F_j / W_j`, `W_j = ∫ w_j J_film J₁ dA` the filter's
 //! own integral over the first vertices, `F_j`'s integrand with `L ≡ 1` (1 at the primal). Its visibility

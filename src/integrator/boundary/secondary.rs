@@ -1,4 +1,4 @@
-//! The secondary boundary term (DESIGN.md §3 "Boundary integrals", seed §2): shadows, i.e. the
+//! The secondary boundary term (docs/theory.md §5; supplemental §2): shadows, i.e. the
 //! visibility between a surface point `x_S` and the next vertex `x_D` of a path (an emitter point for
 //! the `direct` integrator), which jumps where the segment `x_S x_D` touches an occluder `M`
 //! tangentially at `x_B`. The derivation below is the `direct` case; the section "The path integrator"
@@ -15,7 +15,7 @@
 //! (`f` the BSDF towards the camera, `V` the visibility; emission seen directly and environment light
 //! take the same form with `dA(x_D)` replaced by a solid angle). For fixed `x_S`, `V` jumps across
 //! curves on the emitter: the shadow of `M`'s silhouettes as seen from `x_S`. The interior estimator
-//! keeps every visibility fixed at its sampled value; the missing term (seed §1 eqs. 4–6) is
+//! keeps every visibility fixed at its sampled value; the missing term (supplemental §1 eqs. 4–6) is
 //!
 //! ```text
 //!   ∂I_j ⊃ ∫ dA(x_S) w_j J_film ∫_{∂} Δf V_∂ dℓ(x_D),   Δf = f G L_e |blocked side − f G L_e |clear side
@@ -30,7 +30,7 @@
 //! # Sampling the segments
 //!
 //! Change variables from `(x_S, x_D ∈ ∂)` to `(x_B, θ_B)` with the exact area-form Jacobian of
-//! [`super::segment`] (eq. (A) there; the seed's eq. 23 misses `sin∠(c_t, c_n)`):
+//! [`super::segment`] (eq. (A) there; the supplemental's eq. 23 misses `sin∠(c_t, c_n)`):
 //! `dA(x_S) dℓ(x_D) = J dA(x_B) dθ_B`, `J = |x_S x_B| |x_S x_D| κ_n / (|n_S·ω| sin θ_D)`.
 //!
 //! One boundary sample: pick a shape `M` uniformly among the `K` area-samplable curved shapes (finite

@@ -1,5 +1,5 @@
 //! The geometry of one boundary segment `(x_S, x_B, x_D)`: the segment starts at `x_S`, touches the
-//! surface `M` tangentially at `x_B` and ends at `x_D` (DESIGN.md §3 "Boundary integrals"; seed §2).
+//! surface `M` tangentially at `x_B` and ends at `x_D` (docs/theory.md §3.2; supplemental document of Zhou et al. 2024, §2).
 //!
 //! # Notation
 //!
@@ -9,7 +9,7 @@
 //! `M` curves away from the line: only those tangent directions are silhouettes, see
 //! [`is_silhouette_direction`]).
 //!
-//! # Which measures (seed eqs. 12–23)
+//! # Which measures (supplemental eqs. 12–23; docs/theory.md §5.2)
 //!
 //! The secondary boundary integral of path-space differentiable rendering runs over boundary segments with
 //! the measure `dA(x_S) dℓ(x_D)`: `x_S` anywhere on its surface (area), `x_D` on the discontinuity curve
@@ -30,7 +30,7 @@
 //! `dℓ(x_D) sin θ_D`; the 3×3 determinant is `|x_S x_B| |x_S x_D| K₁₁`.) [`boundary_jacobian`] returns (A);
 //! it is what an estimator over `dA(x_S) dℓ(x_D)` must use.
 //!
-//! The seed's eq. 23, `J^B = |x_S x_D| κ_n |x_S x_B| / (sin θ_D sin θ^B sin θ_S)`, uses these angles:
+//! The supplemental's eq. 23, `J^B = |x_S x_D| κ_n |x_S x_B| / (sin θ_D sin θ^B sin θ_S)`, uses these angles:
 //! - `θ_D` (eqs. 14–15): at `x_D`, between the line and the tangent of the discontinuity curve. That
 //!   tangent lies in the plane spanned by `ω` and `e` (see above), so
 //!   `sin θ_D = |n_D·ω| / √((n_D·ω)² + (n_D·e)²)`.
@@ -50,11 +50,11 @@
 //! motion of `x_B` across `ω` (the silhouette itself runs along the direction conjugate to `ω`, which is
 //! oblique; its component across `ω` times `dℓ_n` is the area).
 //!
-//! **Primary boundary** (seed eq. 15, `x_S = c` the camera): with `dℓ(x_B)` the arc length of the
+//! **Primary boundary** (supplemental eq. 15, `x_S = c` the camera; docs/theory.md §4.5): with `dℓ(x_B)` the arc length of the
 //! silhouette curve `{φ = 0, ψ = 0}`, the exact ratio is
 //! `dℓ(x_D)/dℓ(x_B) = |c x_D| sin α_B / (|c x_B| sin θ_D)`, `α_B` the angle between the silhouette
 //! tangent and the view ray; the silhouette tangent is the direction conjugate to `ω` ([`silhouette_tangent`]).
-//! The seed's eq. 15 is the case `α_B = 90°` (a sphere); [`primary_measure_change`] includes `sin α_B`.
+//! The supplemental's eq. 15 is the case `α_B = 90°` (a sphere); [`primary_measure_change`] includes `sin α_B`.
 //!
 //! **`x_D` at infinity** (the environment): `dℓ(x_D)` becomes the angle `dψ = dℓ(x_D) sin θ_D/|x_S x_D|`
 //! swept by the direction from `x_S`, and (A) becomes `|x_S x_B| κ_n / |n_S·ω| · dA(x_B) dθ_B`
@@ -68,7 +68,7 @@
 //! density exact; nothing is clamped at a positive threshold, which would drop a set of positive measure
 //! (bias). The remaining `1/sin` singularities are integrable: they cost variance, not bias.
 //!
-//! # Normal velocity `V_∂` by AD (DESIGN.md §3)
+//! # Normal velocity `V_∂` by AD (docs/theory.md §3.3)
 //!
 //! The curve normal `n_∂` at `x_D` is the unit tangent of `x_D`'s surface perpendicular to the
 //! discontinuity curve, oriented towards the side where the segment clears `M` (`n_∂·n_B > 0`). The
@@ -192,18 +192,18 @@ impl BoundarySegment {
         }
     }
 
-    /// `sin θ_D`: the angle at `x_D` between the segment and the discontinuity curve (seed eq. 14).
+    /// `sin θ_D`: the angle at `x_D` between the segment and the discontinuity curve (supplemental eq. 14).
     pub fn sin_theta_d(&self) -> f32 {
         sin_to_section(self.n_d, self.omega(), self.across())
     }
 
-    /// `sin θ_S` of seed eq. 20: the angle at `x_S` between the segment and the section of `x_S`'s
+    /// `sin θ_S` of supplemental eq. 20: the angle at `x_S` between the segment and the section of `x_S`'s
     /// surface by `M`'s tangent plane at `x_B`.
     pub fn sin_theta_s(&self) -> f32 {
         sin_to_section(self.n_s, self.omega(), self.across())
     }
 
-    /// `sin θ^B` of seed eqs. 17–19: the angle **at `x_S`** between the segment and the section of
+    /// `sin θ^B` of supplemental eqs. 17–19: the angle **at `x_S`** between the segment and the section of
     /// `x_S`'s surface by the plane spanned by `ω` and `n_B`.
     pub fn sin_theta_b(&self) -> f32 {
         sin_to_section(self.n_s, self.omega(), self.n_b)
@@ -224,7 +224,7 @@ impl BoundarySegment {
         guarded_ratio(num, self.cos_s() * self.sin_theta_d())
     }
 
-    /// The seed's eq. 23 taken literally: `|x_S x_D| κ_n |x_S x_B| / (sin θ_D sin θ^B sin θ_S)`, the
+    /// The supplemental's eq. 23 (docs/theory.md (5.4)) taken literally: `|x_S x_D| κ_n |x_S x_B| / (sin θ_D sin θ^B sin θ_S)`, the
     /// change to the oblique measure `dℓ_t(x_S) dℓ_n(x_S) dℓ(x_D)`. Equals [`Self::jacobian`] divided
     /// by `sin∠(c_t, c_n)`; kept for comparison and for the tests, not for estimators.
     pub fn seed_jacobian(&self) -> f32 {
@@ -270,7 +270,7 @@ pub fn boundary_jacobian(seg: &BoundarySegment) -> f32 {
 }
 
 /// The primary boundary's change of measure from the silhouette's arc length at `x_b` to the arc length
-/// of its image curve at `x_d` seen from `c` (seed eq. 15 with the obliquity of the silhouette):
+/// of its image curve at `x_d` seen from `c` (supplemental eq. 15 with the obliquity of the silhouette):
 /// `|c x_D| sin α_B / (|c x_B| sin θ_D)`, `α_B` the angle between `tangent_b` (the unit silhouette
 /// tangent, [`silhouette_tangent`]) and the view ray, `θ_D` the angle at `x_D` between the ray and the
 /// image curve (normal `n_d`). 0 where the ray grazes `x_D`'s surface or the result is not finite.

@@ -1,5 +1,5 @@
 //! The tangent angle `θ_B` of a secondary boundary sample, steered towards the emitters
-//! ([`super::secondary`], seed §2; issue 4 item 3 "choose `θ_B` preferably toward emitters").
+//! ([`super::secondary`], supplemental §2; docs/theory.md §5.4).
 //!
 //! # The lines
 //!

@@ -19,7 +19,7 @@
 //! area per steradian, `J_ω = f²/cos³θ_c`, in place of `J_film`. The image channel is the mean of each
 //! pixel's own samples, bit for bit as [`crate::integrator::render`].
 //!
-//! **Normalisation** (seed §3). `Fixed`: the estimate above. `Differentiable`: the derivative of `F_j /
+//! **Normalisation** (supplemental §3; docs/theory.md §6). `Fixed`: the estimate above. `Differentiable`: the derivative of `F_j /
 //! W_j`, `F_j` the estimate above (primal: the image) and `W_j = ∫ w_j J_film J₁ dA` (`J₁` the first
 //! vertex's area factor, which `L` also carries) estimated like `F_j` with `L = 1` (primal 1): both terms,
 //! `(1/spp) Σ_{s ∈ j} ∂J₁` and the moving-filter term. The pixel's derivative is `∂F_j − I_j ∂W_j`, a
