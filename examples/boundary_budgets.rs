@@ -2,10 +2,10 @@
 //! (primary + secondary samples per pixel) at the scene's own spp, the noise of `diff`'s complete
 //! derivative times its time, the figure of merit of a Monte Carlo estimator (lower is better).
 //!
-//! The noise is measured without a reference: two renders with seeds 0 and 1 differ by twice the
+//! The noise is measured without a reference: two renders with different seeds differ by twice the
 //! estimator's variance in expectation, so the relative variance of one render is
-//! `Σ(a−b)² / 2 / Σ((a+b)/2)²` over all pixels and channels, averaged over the parameters. The time is
-//! the mean of the two renders'.
+//! `Σ(a−b)² / 2 / Σ((a+b)/2)²` over all pixels and channels, averaged over the parameters and over
+//! `PAIRS` pairs of seeds. The time is the mean of all renders'.
 //!
 //! `cargo run --release --example boundary_budgets -- [SCENE.json] [PARAM ...]`
 //! (defaults: `scenes/sphere_floor.json`, `ball.radius ball.center.x light.center.x`, all in one pass).
@@ -14,6 +14,9 @@ use implicit_psdr::integrator::{BoundaryBudget, DiffOptions, RenderOptions, rend
 use implicit_psdr::scene;
 use std::path::Path;
 use std::time::Instant;
+
+/// Pairs of seeds per budget.
+const PAIRS: u64 = 3;
 
 /// The budget pairs measured: proportional ones around the default and a few lopsided ones.
 const BUDGETS: [(u32, u32); 9] = [
@@ -57,36 +60,38 @@ fn main() -> implicit_psdr::Result<()> {
             primary_spp: Some(primary),
             secondary_spp: Some(secondary),
         };
-        let mut renders = Vec::new();
-        let mut seconds = 0.0;
-        for seed in 0..2 {
-            let options = DiffOptions {
-                render: RenderOptions {
-                    spp,
-                    seed,
-                    ..RenderOptions::default()
-                },
-                boundary,
-                ..DiffOptions::default()
-            };
-            let start = Instant::now();
-            renders.push(render_derivatives(&scene, params.len(), &options)?.total());
-            seconds += start.elapsed().as_secs_f64() / 2.0;
+        let (mut variance, mut seconds) = (0.0, 0.0);
+        for pair in 0..PAIRS {
+            let mut renders = Vec::new();
+            for seed in [2 * pair, 2 * pair + 1] {
+                let options = DiffOptions {
+                    render: RenderOptions {
+                        spp,
+                        seed,
+                        ..RenderOptions::default()
+                    },
+                    boundary,
+                    ..DiffOptions::default()
+                };
+                let start = Instant::now();
+                renders.push(render_derivatives(&scene, params.len(), &options)?.total());
+                seconds += start.elapsed().as_secs_f64() / (2 * PAIRS) as f64;
+            }
+            variance += renders[0]
+                .iter()
+                .zip(&renders[1])
+                .map(|(a, b)| {
+                    let (mut diff, mut mean) = (0.0, 0.0);
+                    for (x, y) in a.rgb.iter().zip(&b.rgb) {
+                        let (x, y) = (*x as f64, *y as f64);
+                        diff += (x - y).powi(2) / 2.0;
+                        mean += ((x + y) / 2.0).powi(2);
+                    }
+                    diff / mean
+                })
+                .sum::<f64>()
+                / (params.len() as u64 * PAIRS) as f64;
         }
-        let variance = renders[0]
-            .iter()
-            .zip(&renders[1])
-            .map(|(a, b)| {
-                let (mut diff, mut mean) = (0.0, 0.0);
-                for (x, y) in a.rgb.iter().zip(&b.rgb) {
-                    let (x, y) = (*x as f64, *y as f64);
-                    diff += (x - y).powi(2) / 2.0;
-                    mean += ((x + y) / 2.0).powi(2);
-                }
-                diff / mean
-            })
-            .sum::<f64>()
-            / params.len() as f64;
         println!(
             "| {primary} + {secondary} | {variance:.4} | {seconds:.3} | {:.5} |",
             variance * seconds
