@@ -380,7 +380,7 @@ fn bad_arguments_exit_2_without_output() {
                 "--param",
                 "ball.radius",
             ],
-            "--param ball.radius given twice",
+            "--param: parameter \"ball.radius\" is given twice",
         ),
         (
             &[
@@ -454,7 +454,7 @@ fn bad_parameters_exit_2_without_output() {
     );
     assert_failure(
         &out,
-        "--h 2 takes ball.radius = 1 to 3 and -1: scene.json: ball.radius",
+        "scene.json: ball.radius: must be > 0, got -1 (the step h = 2 takes ball.radius = 1 to 3 and -1)",
     );
     // A negative step is a value, not a flag.
     assert_failure(

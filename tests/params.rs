@@ -98,7 +98,7 @@ fn issue_names_exist_with_their_values() {
         ("ball.translate.x", 0.0),
         ("floor.translate.y", 0.0),
         ("floor.half_size.x", 50.0),
-        ("floor.rounding", 0.0),
+        ("floor.rounding", 0.25),
     ] {
         assert_eq!(scene.parameter(name).unwrap(), value, "{name}");
     }

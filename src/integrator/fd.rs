@@ -3,7 +3,8 @@
 
 use super::RenderOptions;
 use crate::error::{Error, Result};
-use crate::film::Image;
+use crate::film::{Channels, Image};
+use crate::integrator::driver::RenderStats;
 use crate::scene::Scene;
 
 /// Relative step of [`default_step`].
@@ -40,14 +41,24 @@ pub fn parameter_value(scene: &Scene, name: &str) -> Result<f32> {
 /// `(π + h) − (π − h)`, not `2h`, so that rounding of the parameter itself costs no accuracy.
 ///
 /// Errors (before anything is rendered): `h` not finite and positive; an unknown parameter (with near
-/// matches); a value `π ± h` the parameter does not accept (e.g. a radius `≤ 0`); `h` too small to change
-/// the parameter in `f32`.
+/// matches); a value `π ± h` the parameter does not accept (e.g. a radius `≤ 0`; the error names the
+/// parameter, the step and both values); `h` too small to change the parameter in `f32`.
 pub fn finite_difference(
     scene: &Scene,
     name: &str,
     h: f32,
     options: &RenderOptions,
 ) -> Result<Image> {
+    Ok(difference(scene, name, h, options)?.0)
+}
+
+/// [`finite_difference`] and the counters of its two renders.
+fn difference(
+    scene: &Scene,
+    name: &str,
+    h: f32,
+    options: &RenderOptions,
+) -> Result<(Image, RenderStats)> {
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::Unsupported(format!(
             "finite-difference step must be a positive number, got {h}"
@@ -61,15 +72,74 @@ pub fn finite_difference(
             "finite-difference step {h} does not change {name} = {value} in f32"
         )));
     }
-    let plus = scene.with_parameter(name, high)?;
-    let minus = scene.with_parameter(name, low)?;
-    let (image_plus, _) = super::render(&plus, options);
-    let (image_minus, _) = super::render(&minus, options);
+    let with_step = |e| match e {
+        Error::Field { field, message } => Error::Field {
+            field,
+            message: format!(
+                "{message} (the step h = {h} takes {name} = {value} to {high} and {low})"
+            ),
+        },
+        e => e,
+    };
+    let plus = scene.with_parameter(name, high).map_err(with_step)?;
+    let minus = scene.with_parameter(name, low).map_err(with_step)?;
+    let (image_plus, mut stats) = super::render(&plus, options);
+    let (image_minus, stats_minus) = super::render(&minus, options);
+    stats.absorb(stats_minus);
     let mut derivative = image_plus;
     for (d, m) in derivative.rgb.iter_mut().zip(&image_minus.rgb) {
         *d = (*d - m) / step;
     }
-    Ok(derivative)
+    Ok((derivative, stats))
+}
+
+/// The image at a parameter's value and its central difference, as the `fd` command writes them.
+#[derive(Clone, Debug)]
+pub struct FiniteDifference {
+    /// The image at the parameter's current value.
+    pub image: Image,
+    /// The central difference ([`finite_difference`]), per unit of the parameter.
+    pub derivative: Image,
+    /// The parameter's current value.
+    pub value: f32,
+    /// The step used.
+    pub h: f32,
+    /// Counters of the three renders; `seconds` is their total time.
+    pub stats: RenderStats,
+}
+
+/// The image and the central difference of parameter `name` with step `h` (default [`default_step`]
+/// of its value), all three renders with `options`. Errors: those of [`finite_difference`].
+pub fn render_with_difference(
+    scene: &Scene,
+    name: &str,
+    h: Option<f32>,
+    options: &RenderOptions,
+) -> Result<FiniteDifference> {
+    let start = std::time::Instant::now();
+    let value = parameter_value(scene, name)?;
+    let h = h.unwrap_or_else(|| default_step(value));
+    let (derivative, stats_difference) = difference(scene, name, h, options)?;
+    let (image, mut stats) = super::render(scene, options);
+    stats.absorb(stats_difference);
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(FiniteDifference {
+        image,
+        derivative,
+        value,
+        h,
+        stats,
+    })
+}
+
+impl FiniteDifference {
+    /// The EXR channels of the `fd` command: `R`, `G`, `B` (the image) and `d.P.R|G|B` for parameter
+    /// `P` = `name`, the same names as the derivative commands'.
+    pub fn channels(&self, name: &str) -> Channels {
+        let mut channels = self.image.rgb_channels("");
+        channels.extend(self.derivative.rgb_channels(&format!("d.{name}.")));
+        channels
+    }
 }
 
 #[cfg(test)]
@@ -116,6 +186,8 @@ mod tests {
         let error = finite_difference(&scene, "sky.radiance.q", h, &options).unwrap_err();
         assert!(error.to_string().contains("sky.radiance"), "{error}");
         assert!(finite_difference(&scene, "sky.radiance.r", -1.0, &options).is_err());
-        assert!(finite_difference(&scene, "ball.radius", 2.0, &options).is_err());
+        let error = finite_difference(&scene, "ball.radius", 2.0, &options).unwrap_err();
+        let expected = "the step h = 2 takes ball.radius = 1 to 3 and -1";
+        assert!(error.to_string().contains(expected), "{error}");
     }
 }

@@ -1,0 +1,152 @@
+//! The command line: subcommands, their arguments and help texts, and the parsers of argument values.
+
+use clap::{Args, Parser, Subcommand};
+use implicit_psdr::integrator::Normalization;
+use std::path::PathBuf;
+
+/// Physically based rendering of implicit surfaces.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+/// The scene and how to sample it, shared by the rendering commands.
+#[derive(Args, Debug)]
+pub(crate) struct SceneArgs {
+    /// The scene file (JSON, see README).
+    pub(crate) scene: PathBuf,
+    /// Samples per pixel (default: the scene's `spp`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) spp: Option<u32>,
+    /// Seed of the deterministic sampler.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) seed: u64,
+    /// Override a parameter listed by `params` (repeatable), e.g. `--set ball.radius=0.8`.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = assignment)]
+    pub(crate) set: Vec<(String, f32)>,
+}
+
+/// Output files of the rendering commands; the defaults are `<command>.exr` and `<command>.png`.
+#[derive(Args, Debug)]
+pub(crate) struct OutputArgs {
+    /// Output EXR file (`.exr`) [default: <command>.exr, e.g. out.exr for render].
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// Output PNG file (`.png`) [default: <command>.png, e.g. out.png for render].
+    #[arg(long)]
+    pub(crate) png: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug)]
+pub(crate) enum Command {
+    /// Render a scene to an EXR (linear float32 R, G, B) and a PNG (8-bit sRGB, clamped).
+    Render {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[command(flatten)]
+        outputs: OutputArgs,
+    },
+    /// Sample one shape's SDF over its bounds (padded) into a grid and write it as a float32 .npy of
+    /// shape [nz, ny, nx].
+    Bake(BakeArgs),
+    /// List every differentiable parameter of a scene with its value, one `name value` per line
+    /// (angles in degrees, so derivatives with respect to them are per degree).
+    Params {
+        /// The scene file.
+        scene: PathBuf,
+    },
+    /// Render the image and its derivatives with respect to scene parameters (forward mode) to an EXR
+    /// (`R`, `G`, `B`, and `d.P.R`, `d.P.G`, `d.P.B` per parameter P) and a PNG (the image beside one
+    /// colour-mapped panel per derivative).
+    Diff(DiffArgs),
+    /// Central finite differences of the image with respect to one parameter, with common random numbers
+    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
+    Fd(FdArgs),
+    /// Compare the derivative channels of two EXR files (B is the reference): relative L2 error, raw and
+    /// after a 5x5 box blur, sums, sums of absolute values and correlation.
+    Compare {
+        /// The EXR file to check.
+        a: PathBuf,
+        /// The reference EXR file.
+        b: PathBuf,
+        /// Compare only the channels whose names start with PREFIX (default: every channel starting
+        /// with `d`).
+        #[arg(long, value_name = "PREFIX")]
+        channel: Option<String>,
+    },
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct BakeArgs {
+    /// The scene file holding the shape.
+    pub(crate) scene: PathBuf,
+    /// Name of the shape to bake.
+    #[arg(long)]
+    pub(crate) shape: String,
+    /// Samples along the longest edge of the box (4 to 512); the other axes get near-cubic cells.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=512))]
+    pub(crate) res: u32,
+    /// Output .npy file.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct DiffArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// A parameter to differentiate with respect to (repeat for several; see `params`).
+    #[arg(long = "param", value_name = "P", required = true)]
+    pub(crate) params: Vec<String>,
+    /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_primary.P.R|G|B`,
+    /// `d_secondary.P.R|G|B`; they sum to `d.P`).
+    #[arg(long)]
+    pub(crate) terms: bool,
+    /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it [default: spp/8,
+    /// rounded up].
+    #[arg(long)]
+    pub(crate) spp_secondary: Option<u32>,
+    /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it [default:
+    /// spp/32, rounded up].
+    #[arg(long)]
+    pub(crate) spp_primary: Option<u32>,
+    /// Pixel normalisation: `differentiable` (F / W, both differentiated: lower error) or `fixed`
+    /// (the filter-weight sum is a constant).
+    #[arg(long, default_value = "differentiable")]
+    pub(crate) normalization: Normalization,
+    #[command(flatten)]
+    pub(crate) outputs: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct FdArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The parameter (see `params`).
+    #[arg(long = "param", value_name = "P")]
+    pub(crate) param: String,
+    /// Step, a finite number > 0 (default: 0.01 · max(|P|, 1)).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
+    pub(crate) h: Option<f32>,
+    #[command(flatten)]
+    pub(crate) outputs: OutputArgs,
+}
+
+/// `NAME=VALUE` with a finite value.
+pub(crate) fn assignment(text: &str) -> Result<(String, f32), String> {
+    let (name, value) = text.split_once('=').ok_or("expected NAME=VALUE")?;
+    match value.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok((name.trim().to_string(), v)),
+        _ => Err(format!("{value:?} is not a finite number")),
+    }
+}
+
+/// A finite number > 0.
+pub(crate) fn positive_f32(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a finite number > 0, got {text:?}")),
+    }
+}
