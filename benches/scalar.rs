@@ -150,7 +150,7 @@ fn run<S: Scalar>(pts: &[glam::Vec3], seeded: usize) -> f32 {
     let p: [S; 8] = std::array::from_fn(|i| {
         S::lift(
             black_box(PARAMS[i]),
-            if i < seeded { Some(i as u16) } else { None },
+            if i < seeded { Some(i as u32) } else { None },
         )
     });
     let mut acc = S::zero();

@@ -522,7 +522,7 @@ fn seg_sphere_blocked(xs: glam::DVec3, y: glam::DVec3, c: glam::DVec3, r: f64) -
     (xs + d * t - c).length() < r
 }
 
-fn slotted(v: f32, slot: u16) -> Param {
+fn slotted(v: f32, slot: u32) -> Param {
     Param {
         value: v,
         slot: Some(slot),

@@ -136,7 +136,7 @@ fn dual_derivatives_match_central_differences() {
     let n = V3::<f32>::new(0.3, 0.5, 0.81).normalize_or_zero();
     let lift = |v: V3<f32>| V3::<Dual32>::constant(v.into());
     for which in 0..4 {
-        let set = |cam: &mut Camera, delta: f32, slot: Option<u16>| match which {
+        let set = |cam: &mut Camera, delta: f32, slot: Option<u32>| match which {
             0 => {
                 cam.origin.c[0].value += delta;
                 cam.origin.c[0].slot = slot;

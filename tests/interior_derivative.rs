@@ -63,7 +63,7 @@ enum SphereParam {
 /// light is out of view. `value` replaces the number named by `which`.
 fn sphere_scene(which: SphereParam, value: f32, select: bool) -> Scene {
     let v = |p: SphereParam, default: f32| if p == which { value } else { default };
-    let slot = |p: SphereParam| (select && p == which).then_some(0u16);
+    let slot = |p: SphereParam| (select && p == which).then_some(0u32);
     let mut cam = camera([v(SphereParam::CameraX, 0.0), 1.0, 4.0], [0.0; 3], 30.0);
     cam.origin.c[0].slot = slot(SphereParam::CameraX);
     let mut sdf = Sdf::sphere([0.0; 3], v(SphereParam::Radius, 1.0));
@@ -105,7 +105,7 @@ enum FloorParam {
 /// camera looks down at it so the floor fills the frame and the light is out of view.
 fn floor_scene(which: FloorParam, value: f32, select: bool, integrator: IntegratorKind) -> Scene {
     let v = |p: FloorParam, default: f32| if p == which { value } else { default };
-    let slot = |p: FloorParam| (select && p == which).then_some(0u16);
+    let slot = |p: FloorParam| (select && p == which).then_some(0u32);
     let mut translate = Param3::new([0.0, v(FloorParam::TranslateY, 0.0), 0.0]);
     translate.c[1].slot = slot(FloorParam::TranslateY);
     let floor = Shape::translated(

@@ -26,7 +26,7 @@ fn names(list: &[&str]) -> Vec<String> {
 }
 
 /// Slot of every parameter, by name.
-fn slots(scene: &Scene) -> Vec<(String, Option<u16>)> {
+fn slots(scene: &Scene) -> Vec<(String, Option<u32>)> {
     let mut out = Vec::new();
     scene.visit_params(&mut |n, p| out.push((n.to_string(), p.slot)));
     out
@@ -232,7 +232,7 @@ fn select_parameters_sets_exactly_the_requested_slots() {
     let wanted = names(&["ring.sdf.angle", "blob.k", "camera.fov_y", "sky.radiance.g"]);
     scene.select_parameters(&wanted).unwrap();
     for (name, slot) in slots(&scene) {
-        let expected = wanted.iter().position(|w| *w == name).map(|k| k as u16);
+        let expected = wanted.iter().position(|w| *w == name).map(|k| k as u32);
         assert_eq!(slot, expected, "{name}");
     }
     // A new selection replaces the old one; an empty one clears it.

@@ -105,7 +105,7 @@ trait Directions: Scalar {
     fn d(self, k: usize) -> f32;
     /// `x` seeded in direction `k` (a constant for `k >= DIRS`).
     fn seed(x: f32, k: usize) -> Self {
-        Self::lift(x, Some(k as u16))
+        Self::lift(x, Some(k as u32))
     }
 }
 
@@ -478,10 +478,10 @@ const POINTS: [[f32; 8]; 3] = [
 fn dual_n8_slots_match_dual32_seeded_per_input() {
     for p in POINTS {
         let many = eight(std::array::from_fn(|i| {
-            DualN::<8>::lift(p[i], Some(i as u16))
+            DualN::<8>::lift(p[i], Some(i as u32))
         }));
         let few = eight(std::array::from_fn(|i| {
-            DualN::<3>::lift(p[i], Some(i as u16))
+            DualN::<3>::lift(p[i], Some(i as u32))
         }));
         // Lanes are independent: the first three lanes of `DualN<8>` are those of `DualN<3>`, bit for bit.
         assert_eq!(few.eps, many.eps[..3]);

@@ -26,6 +26,12 @@ pub trait SampleSink<S: Scalar> {
     /// A share of pixel `pixel`'s `F` and `W`, already weighted by that pixel's filter over the
     /// sample's density.
     fn add_splat(&mut self, pixel: usize, radiance: Vec3<S>, weight: S);
+    /// Called before a sample's first number is computed (a reverse-mode sink marks its tape here).
+    #[inline(always)]
+    fn begin_sample(&mut self) {}
+    /// Called after a sample's last share (a reverse-mode sink back-propagates the sample here).
+    #[inline(always)]
+    fn end_sample(&mut self) {}
 }
 
 /// A film: hands out one tile per work item and merges the tiles back, in item order.
@@ -36,6 +42,17 @@ pub trait Film: Sync {
     fn tile(&self, item: usize) -> Self::Tile;
     /// Adds a finished tile; called in increasing item order.
     fn merge(&mut self, item: usize, tile: Self::Tile);
+    /// Runs one work item's `work` on the worker thread (a reverse-mode film records the item's tape
+    /// around it).
+    #[inline(always)]
+    fn run_item<R>(&self, work: impl FnOnce() -> R) -> R {
+        work()
+    }
+    /// How many items run between merges: tiles of a wave are held until the wave is merged (a film
+    /// with large tiles bounds its memory with this). Any value gives the same result.
+    fn wave(&self) -> usize {
+        usize::MAX
+    }
 }
 
 /// Splats `radiance` and `weight` at film point `p` (pixels) to every pixel of a `width × height`

@@ -1,11 +1,13 @@
 //! Pixel filters, images and their output (EXR, PNG).
 
 pub mod accumulate;
+mod adjoint;
 pub mod colormap;
 mod filter;
 mod output;
 
 pub use accumulate::{Film, Normalization, PixelFilm, SampleSink, SplatFilm, splat_filtered};
+pub use adjoint::{AdjointFilm, AdjointTile};
 pub use filter::{Filter, Footprint};
 pub use output::{
     Channels, check_output_path, read_exr, srgb_encode, write_exr, write_exr_and_png, write_png,

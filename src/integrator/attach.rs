@@ -20,7 +20,7 @@
 
 use super::path::{Anchor, Attach, Attached};
 use crate::math::Vec3;
-use crate::scalar::{Param, Scalar};
+use crate::scalar::{GridValues, Param, Scalar};
 use crate::scene::{Scene, Shape};
 
 pub use crate::scalar::Grad;
@@ -44,15 +44,24 @@ fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
 }
 
 /// A copy of `scene` for the derivative pass over slots `lo .. lo + width`: slot `k` in that window
-/// becomes `k − lo`, every other slot none.
+/// becomes `k − lo`, every other slot none (grid directions included; reverse-mode blocks are kept).
 pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
+    let window = |k: u32| {
+        let k = k as usize;
+        (k >= lo && k < lo + width).then(|| (k - lo) as u32)
+    };
     let mut s = scene.clone();
-    s.visit_params_mut(&mut |_, p: &mut Param| {
-        p.slot = p.slot.and_then(|k| {
-            let k = usize::from(k);
-            (k >= lo && k < lo + width).then(|| (k - lo) as u16)
+    s.visit_params_mut(&mut |_, p: &mut Param| p.slot = p.slot.and_then(window));
+    for shape in &mut s.shapes {
+        shape.sdf.visit_grid_selections_mut(&mut |g| {
+            if let GridValues::Direction { slot, .. } = g {
+                match window(*slot) {
+                    Some(k) => *slot = k,
+                    None => *g = GridValues::Constant,
+                }
+            }
         });
-    });
+    }
     s
 }
 
@@ -80,7 +89,7 @@ fn geometry_selected(shape: &Shape) -> bool {
     shape
         .sdf
         .visit_params("", &mut |_, p: &Param| any |= p.slot.is_some());
-    any
+    any || shape.sdf.grid_values_selected()
 }
 
 /// The [`Attach`] of the derivative pass: attached vertices of [`Scene`]'s shapes, emitters and camera

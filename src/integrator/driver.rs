@@ -72,7 +72,8 @@ impl RenderStats {
 }
 
 /// Runs `work(item, tile, stats)` for items `0..items` in parallel and merges the tiles into `film` in
-/// item order; returns the merged counts. `stage` names the work for `progress`.
+/// item order (in waves of [`Film::wave`] items); returns the merged counts. `stage` names the work for
+/// `progress`.
 pub fn run<F: Film>(
     film: &mut F,
     items: usize,
@@ -81,21 +82,28 @@ pub fn run<F: Film>(
     work: impl Fn(usize, &mut F::Tile, &mut RenderStats) + Sync,
 ) -> RenderStats {
     let done = AtomicU64::new(0);
-    let tiles: Vec<(F::Tile, RenderStats)> = (0..items)
-        .into_par_iter()
-        .map(|item| {
-            let mut tile = film.tile(item);
-            let mut stats = RenderStats::default();
-            work(item, &mut tile, &mut stats);
-            let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress.report(stage, finished, items as u64);
-            (tile, stats)
-        })
-        .collect();
+    let wave = film.wave().max(1);
     let mut stats = RenderStats::default();
-    for (item, (tile, s)) in tiles.into_iter().enumerate() {
-        film.merge(item, tile);
-        stats.absorb(s);
+    let mut start = 0;
+    while start < items {
+        let end = items.min(start.saturating_add(wave));
+        let shared: &F = film;
+        let tiles: Vec<(F::Tile, RenderStats)> = (start..end)
+            .into_par_iter()
+            .map(|item| {
+                let mut tile = shared.tile(item);
+                let mut stats = RenderStats::default();
+                shared.run_item(|| work(item, &mut tile, &mut stats));
+                let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress.report(stage, finished, items as u64);
+                (tile, stats)
+            })
+            .collect();
+        for (item, (tile, s)) in (start..end).zip(tiles) {
+            film.merge(item, tile);
+            stats.absorb(s);
+        }
+        start = end;
     }
     stats
 }

@@ -44,6 +44,7 @@ pub mod boundary;
 pub mod diff;
 pub mod driver;
 pub mod fd;
+pub mod gradient;
 pub mod options;
 pub mod path;
 pub mod primal;
@@ -59,5 +60,6 @@ pub use diff::{
     render_interior_in,
 };
 pub use driver::RenderStats;
+pub use gradient::{Gradient, GradientLayout, Loss, LossGradient, loss_gradient, render_gradient};
 pub use options::{BoundaryBudget, DiffOptions, Progress, RenderOptions};
 pub use primal::{CAMERA_STREAM, render, sample_pixel, trace_sample};

@@ -1,6 +1,6 @@
 //! Forward-mode number types whose derivative directions can be read back, one `f32` each.
 
-use super::{Dual32, DualN, Scalar};
+use super::{Dual32, DualN, Rev, Scalar};
 
 /// A forward-mode scalar type whose derivative directions can be read back.
 pub trait Directions: Scalar {
@@ -24,6 +24,16 @@ impl<const N: usize> Directions for DualN<N> {
     #[inline(always)]
     fn direction(&self, k: usize) -> f32 {
         self.eps[k]
+    }
+}
+
+/// A reverse-mode number has no forward directions to read: its derivatives are checked when the tape
+/// is swept, so the per-direction finiteness checks of the estimators pass it through.
+impl Directions for Rev {
+    const COUNT: usize = 0;
+    #[inline(always)]
+    fn direction(&self, _k: usize) -> f32 {
+        0.0
     }
 }
 

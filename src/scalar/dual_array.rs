@@ -250,7 +250,7 @@ impl<const N: usize> Scalar for DualN<N> {
     #[inline(always)]
     fn lift(value: f32, slot: Slot) -> Self {
         match slot {
-            Some(k) => Self::variable(value, usize::from(k)),
+            Some(k) => Self::variable(value, k as usize),
             None => Self::constant(value),
         }
     }

@@ -9,7 +9,7 @@
 //! (so the local derivative carries its own parameter derivatives) and applies the chain rule
 //! `g' = g · d` in each direction.
 
-use super::{Scalar, Slot, rules};
+use super::{LatticeTaps, Scalar, Slot, lattice_sum_nested, rules};
 use crate::math::Vec3;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
@@ -229,5 +229,33 @@ impl<S: Scalar> Scalar for Grad<S> {
     #[inline]
     fn powf(self, n: f32) -> Self {
         self.chain(rules::powf(self.v, n))
+    }
+
+    /// With a reverse-mode block, by trilinearity: the value is `S`'s sum of the weights' values and
+    /// `g_i` the sum over axes of `S`'s sums with that axis's weights replaced by their `i`-th spatial
+    /// derivative, so that each is one node of `S` over the block (the value and the gradient's 3×64).
+    /// Otherwise the nested sum in `Grad<S>` arithmetic.
+    fn lattice_sum(
+        taps: &LatticeTaps<Self>,
+        values: &[f32],
+        dims: [usize; 3],
+        block: Slot,
+    ) -> Self {
+        if block.is_none() {
+            return lattice_sum_nested(taps, values, dims[0], dims[1]);
+        }
+        let part = |deriv: Option<(usize, usize)>| {
+            let t = taps.map(|a, w| match deriv {
+                Some((axis, i)) if axis == a => w.g[i],
+                _ => w.v,
+            });
+            S::lattice_sum(&t, values, dims, block)
+        };
+        Self {
+            v: part(None),
+            g: std::array::from_fn(|i| {
+                part(Some((0, i))) + part(Some((1, i))) + part(Some((2, i)))
+            }),
+        }
     }
 }

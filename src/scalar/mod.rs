@@ -3,7 +3,8 @@
 //! The same shading code runs with `f32` (the image), with forward-mode dual numbers (derivative images)
 //! and, later, with a reverse-mode tape type. num-dual's types do not implement `num_traits::Float`, so the
 //! trait is our own and small: arithmetic, a handful of elementary functions, `constant`, `primal`,
-//! `detach`, and [`Scalar::lift`], which turns a scene parameter into the scalar type.
+//! `detach`, [`Scalar::lift`], which turns a scene parameter into the scalar type, and
+//! [`Scalar::lattice_sum`], the one operation through which a grid's values enter.
 //!
 //! Conventions (as in num-dual): comparisons look at the primal value only. A branch taken on a primal
 //! value loses the derivative of the branch condition; where that matters a boundary term recovers it.
@@ -13,6 +14,8 @@ mod dual;
 mod dual_array;
 mod grad;
 pub mod interval;
+mod lattice;
+mod reverse;
 pub mod rules;
 
 pub(crate) use directions::dispatch_directions;
@@ -20,7 +23,9 @@ pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
 pub use grad::Grad;
+pub use lattice::{GridValues, LatticeTaps, lattice_sum_nested};
 pub use num_dual::Dual32;
+pub use reverse::{MAX_GRADIENT_ENTRY, Mark, Recording, Rev};
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -28,9 +33,9 @@ use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssi
 /// Which derivative direction a scene parameter feeds, if any.
 ///
 /// `None` means the parameter is a constant for the current pass. For a one-direction dual, slot 0 is the
-/// seeded direction; for a multi-direction dual, slot `k` is the `k`-th direction; for a tape, the slot
-/// names the gradient entry.
-pub type Slot = Option<u16>;
+/// seeded direction; for a multi-direction dual, slot `k` is the `k`-th direction; for the reverse-mode
+/// [`Rev`], the slot is the parameter's gradient entry (a grid's values take a block of entries).
+pub type Slot = Option<u32>;
 
 /// A real number that may carry derivatives.
 ///
@@ -149,6 +154,20 @@ pub trait Scalar:
     #[inline]
     fn sqr(self) -> Self {
         self * self
+    }
+
+    /// A grid's B-spline at one point: the separable sum of [`lattice_sum_nested`] over the values of
+    /// a lattice of `dims = [nx, ny, nz]` (x fastest). `block` is the gradient entry of `values[0]` when
+    /// the values are differentiated in reverse mode ([`GridValues::block`]); other types ignore it.
+    #[inline(always)]
+    fn lattice_sum(
+        taps: &LatticeTaps<Self>,
+        values: &[f32],
+        dims: [usize; 3],
+        block: Slot,
+    ) -> Self {
+        let _ = block;
+        lattice_sum_nested(taps, values, dims[0], dims[1])
     }
 
     /// `formula`'s dedicated enclosure of its value over the sets `args` if this is a set-valued type

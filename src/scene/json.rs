@@ -15,7 +15,7 @@ use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::error::{Error, FieldPath, Result};
 use crate::film::Filter;
-use crate::scalar::{Param, Param3};
+use crate::scalar::{GridValues, Param, Param3};
 use crate::sdf::{GridData, Sdf, read_npy};
 use glam::Vec3;
 use serde_json::{Map, Value};
@@ -659,6 +659,7 @@ impl Context<'_> {
             bbox_min,
             bbox_max,
             level: Param::new(o.opt_f32("level")?.unwrap_or(0.0)),
+            selection: GridValues::Constant,
         })
     }
 

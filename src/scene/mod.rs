@@ -1,10 +1,12 @@
 //! The scene in `f32` (with a [`crate::Param`] for every differentiable number) and ray queries against it.
 //! Parsing lives in [`load`]; rendering types never see serde.
 
+mod grids;
 mod integrator_kind;
 mod json;
 mod params;
 
+pub use grids::GridBlock;
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 

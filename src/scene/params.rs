@@ -16,7 +16,7 @@ use crate::sdf::Sdf;
 const MAX_SUGGESTIONS: usize = 3;
 
 /// The prefix of the unnamed root node of shape `shape` (see [`Scene::parameters`]).
-fn root_prefix(shape: &str, sdf: &Sdf) -> String {
+pub(super) fn root_prefix(shape: &str, sdf: &Sdf) -> String {
     match sdf {
         Sdf::Transform { .. } => format!("{shape}.sdf"),
         _ => shape.to_string(),
@@ -287,16 +287,6 @@ impl Scene {
     /// none. An unknown name is an error listing near matches, and so is a name given twice; on error the
     /// scene is unchanged.
     pub fn select_parameters(&mut self, names: &[String]) -> Result<()> {
-        if names.len() > usize::from(u16::MAX) + 1 {
-            return Err(Error::field(
-                "--param",
-                format!(
-                    "at most {} parameters at once, got {}",
-                    usize::from(u16::MAX) + 1,
-                    names.len()
-                ),
-            ));
-        }
         for (k, name) in names.iter().enumerate() {
             if names[..k].contains(name) {
                 return Err(Error::field(
@@ -315,7 +305,7 @@ impl Scene {
             return Err(self.unknown(&names[k]));
         }
         self.visit_params_mut(&mut |n, p| {
-            p.slot = names.iter().position(|x| x == n).map(|k| k as u16);
+            p.slot = names.iter().position(|x| x == n).map(|k| k as u32);
         });
         Ok(())
     }
@@ -356,23 +346,7 @@ impl Scene {
         {
             return Err(v);
         }
-        let shapes = copy
-            .shapes
-            .into_iter()
-            .map(|s| Shape::translated(s.name, s.sdf, s.bsdf, s.translate))
-            .collect();
-        let mut scene = Scene::new(
-            copy.camera,
-            copy.integrator,
-            copy.spp,
-            shapes,
-            copy.emitters,
-        );
-        scene.trace = crate::trace::TraceSettings {
-            eps: scene.trace.eps,
-            ..self.trace
-        };
-        Ok(scene)
+        Ok(copy.refreshed())
     }
 
     /// The error for an unknown parameter name: near matches by edit distance, or else names of the same

@@ -16,7 +16,7 @@
 use super::GridData;
 use crate::error::{Error, Result};
 use crate::math::{Aabb, Vec3};
-use crate::scalar::Scalar;
+use crate::scalar::{GridValues, LatticeTaps, Scalar, lattice_sum_nested};
 
 impl GridData {
     /// A grid after checking that every dimension is at least 4, that there are `nx · ny · nz` values
@@ -100,10 +100,17 @@ fn axis_taps<S: Scalar>(u: S, n: usize) -> ([usize; 4], [S; 4]) {
     }
 }
 
-/// The B-spline at `q`, which must lie in the box.
+/// The B-spline at `q`, which must lie in the box, with the derivative of the values that `selection`
+/// asks for (a forward-mode direction adds `ε_slot · Σ w u`; a reverse-mode block is recorded by
+/// [`Scalar::lattice_sum`]).
 #[inline(always)]
-fn spline<S: Scalar>(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: Vec3<S>) -> S {
-    let [nx, ny, _] = data.dims;
+fn spline<S: Scalar>(
+    data: &GridData,
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+    selection: &GridValues,
+    q: Vec3<S>,
+) -> S {
     let ext = bmax - bmin;
     let taps = |a: usize, c: S| {
         let n = data.dims[a];
@@ -118,18 +125,19 @@ fn spline<S: Scalar>(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: Vec
     let (ix, wx) = taps(0, q.x);
     let (iy, wy) = taps(1, q.y);
     let (iz, wz) = taps(2, q.z);
-    let mut acc = S::zero();
-    for c in 0..4 {
-        let mut acc_y = S::zero();
-        for b in 0..4 {
-            let row = (iz[c] * ny + iy[b]) * nx;
-            let v = &data.values[row..row + nx];
-            let acc_x = wx[0] * v[ix[0]] + wx[1] * v[ix[1]] + wx[2] * v[ix[2]] + wx[3] * v[ix[3]];
-            acc_y += wy[b] * acc_x;
+    let taps = LatticeTaps {
+        index: [ix, iy, iz],
+        weight: [wx, wy, wz],
+    };
+    let value = S::lattice_sum(&taps, &data.values, data.dims, selection.block());
+    match selection {
+        GridValues::Direction { slot, u } if u.len() == data.values.len() => {
+            value
+                + S::lift(0.0, Some(*slot))
+                    * lattice_sum_nested(&taps, u, data.dims[0], data.dims[1])
         }
-        acc += wz[c] * acc_y;
+        _ => value,
     }
-    acc
 }
 
 /// `φ(p)` of a grid node. A grid that fails [`GridData::validate`]'s shape checks is treated as empty
@@ -139,6 +147,7 @@ pub(super) fn eval<S: Scalar>(
     data: &GridData,
     bmin: glam::Vec3,
     bmax: glam::Vec3,
+    selection: &GridValues,
     p: Vec3<S>,
 ) -> S {
     // Interval types take the certified path: a box may span several cells, which the primal branches
@@ -152,7 +161,7 @@ pub(super) fn eval<S: Scalar>(
     }
     let pp = p.primal();
     if pp.cmpge(bmin).all() && pp.cmple(bmax).all() {
-        return spline(data, bmin, bmax, p);
+        return spline(data, bmin, bmax, selection, p);
     }
     // Outside: clamp (zero derivative across the face) plus the distance to the box, which supplies the
     // normal component of the gradient.
@@ -161,7 +170,7 @@ pub(super) fn eval<S: Scalar>(
         p.y.clamp(bmin.y, bmax.y),
         p.z.clamp(bmin.z, bmax.z),
     );
-    spline(data, bmin, bmax, q) + (p - q).length()
+    spline(data, bmin, bmax, selection, q) + (p - q).length()
 }
 
 /// The control point at extended lattice index `(x, y, z)`, each in `−1..=n`: ghost layers by linear

@@ -40,7 +40,7 @@ pub use npy::{read_npy, write_npy};
 
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
-use crate::scalar::{Dual2Vec3, DualVec3, Param, Param3, Scalar};
+use crate::scalar::{Dual2Vec3, DualVec3, GridValues, Param, Param3, Scalar};
 use std::sync::Arc;
 
 /// Values of a grid SDF: `nx · ny · nz` samples, x fastest (the layout of a C-order `.npy` of shape
@@ -152,6 +152,9 @@ pub enum Sdf {
         /// Iso-level: the node is `spline − level`, so a positive level dilates the surface by about
         /// `level / |∇φ|` and a negative one erodes it (0 keeps the baked surface).
         level: Param,
+        /// How the samples are differentiated in the current pass (the parameter block
+        /// `<node>.values`; constants unless selected).
+        selection: GridValues,
     },
     /// A node given a `name` in the scene file, so that its parameters are `<name>.<field>` (see
     /// [`crate::scene::Scene::parameters`]). It is the child in every respect: evaluation, gradient,
@@ -207,7 +210,8 @@ impl Sdf {
                 bbox_min,
                 bbox_max,
                 level,
-            } => grid::eval(data, *bbox_min, *bbox_max, p) - level.get::<S>(),
+                selection,
+            } => grid::eval(data, *bbox_min, *bbox_max, selection, p) - level.get::<S>(),
             Sdf::Named { child, .. } => child.eval(p),
         }
     }
@@ -337,6 +341,7 @@ impl Sdf {
                 bbox_min,
                 bbox_max,
                 level,
+                ..
             } => grid::bounds(data, *bbox_min, *bbox_max, level.value),
             Sdf::Named { child, .. } => child.bounds(),
         }
@@ -537,6 +542,7 @@ impl Sdf {
             bbox_min,
             bbox_max,
             level: Param::new(0.0),
+            selection: GridValues::Constant,
         })
     }
 }

@@ -68,11 +68,10 @@
 
 use super::{
     BACKGROUND_OFFSET_PIXELS, accumulate_samples, attached_first_vertex, background_offset,
-    background_radiance, finite_splat, on_film, projection_jacobian, splat_on_film,
+    background_radiance, finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
 };
 use crate::emitter::Outline;
-use crate::film::Image;
-use crate::film::accumulate::SplatTile;
+use crate::film::{Film, Image, SampleSink};
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::RenderOptions;
@@ -340,10 +339,34 @@ pub fn add_outline_pass<S: Directions>(
     if outlines.is_empty() {
         return RenderStats::default();
     }
-    let attach = SceneAttach::new(scene);
-    accumulate_samples::<S, _>(
+    accumulate_samples::<S>(
         scene,
         width,
+        samples,
+        |film| run_outlines::<S, _>(scene, outlines, render, samples, film),
+        radiance,
+        coverage,
+    )
+}
+
+/// The outline samples `0..samples` of [`add_outline_pass`] into any film (their shares not yet divided
+/// by `samples`).
+pub(crate) fn run_outlines<S: Directions, F: Film>(
+    scene: &Scene,
+    outlines: &EmitterOutlines,
+    render: &RenderOptions,
+    samples: u64,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    if outlines.is_empty() {
+        return RenderStats::default();
+    }
+    let attach = SceneAttach::new(scene);
+    run_samples::<S, F, _>(
+        film,
         samples,
         ("primary (emitter outlines)", &render.progress),
         PathRecord::default,
@@ -359,8 +382,6 @@ pub fn add_outline_pass<S: Directions>(
                 counters,
             );
         },
-        radiance,
-        coverage,
     )
 }
 
@@ -378,7 +399,7 @@ fn sample<S: Directions>(
     outlines: &EmitterOutlines,
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut SplatTile<S>,
+    splats: &mut impl SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
     let (u0, u1) = (sampler.next_1d(), sampler.next_1d());

@@ -23,8 +23,7 @@ pub use segment::{
 };
 
 use crate::camera::CameraFrame;
-use crate::film::accumulate::SplatTile;
-use crate::film::{Image, SplatFilm, splat_filtered};
+use crate::film::{Film, Image, SampleSink, SplatFilm, splat_filtered};
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::{self, RenderStats};
 use crate::integrator::options::Progress;
@@ -39,19 +38,44 @@ use crate::scene::Scene;
 /// Boundary samples per parallel work item (results are merged in sample order: deterministic).
 const CHUNK: u64 = 256;
 
-/// Runs boundary samples `0..samples` in parallel chunks on the [`driver`] (`state()` once per chunk,
-/// `sample(state, counters, k, tile)` for sample `k`) and adds the mean of their splats to
-/// `radiance[k]` and `coverage[k]` (the same value in the three channels) for directions `k < width` of
-/// `S` ([`SplatFilm`]: sums in `f64` in sample order, whatever the thread count). Returns the counts of
-/// the traced rays; `stage` names the work for `progress`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn accumulate_samples<S: Directions, T>(
-    scene: &Scene,
-    width: usize,
+/// Runs boundary samples `0..samples` in parallel chunks on the [`driver`] into `film` (`state()` once
+/// per chunk, `sample(state, counters, k, tile)` for sample `k`, between the tile's `begin_sample` and
+/// `end_sample`). Returns the counts of the traced rays; `stage` names the work for `progress`.
+pub(crate) fn run_samples<S: Scalar, F: Film, T>(
+    film: &mut F,
     samples: u64,
     (stage, progress): (&str, &Progress),
     state: impl Fn() -> T + Sync,
-    sample: impl Fn(&mut T, &mut TraceCounters, u64, &mut SplatTile<S>) + Sync,
+    sample: impl Fn(&mut T, &mut TraceCounters, u64, &mut F::Tile) + Sync,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    if samples == 0 {
+        return RenderStats::default();
+    }
+    let chunks = samples.div_ceil(CHUNK) as usize;
+    driver::run(film, chunks, stage, progress, |c, tile, stats| {
+        let c = c as u64;
+        let mut st = state();
+        let mut counters = TraceCounters::default();
+        for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+            tile.begin_sample();
+            sample(&mut st, &mut counters, k, tile);
+            tile.end_sample();
+        }
+        stats.exhausted_rays += counters.exhausted;
+    })
+}
+
+/// Forward mode: runs `run` (an estimator's [`run_samples`]) on a [`SplatFilm`] of directions
+/// `0..width` of `S` and adds the mean of the splats over `samples` to `radiance[k]` and `coverage[k]`
+/// (the same value in the three channels); sums in `f64` in sample order, whatever the thread count.
+pub(crate) fn accumulate_samples<S: Directions>(
+    scene: &Scene,
+    width: usize,
+    samples: u64,
+    run: impl FnOnce(&mut SplatFilm<S>) -> RenderStats,
     radiance: &mut [Image],
     coverage: &mut [Image],
 ) -> RenderStats {
@@ -59,16 +83,7 @@ pub(crate) fn accumulate_samples<S: Directions, T>(
         return RenderStats::default();
     }
     let mut film = SplatFilm::<S>::new(scene.camera.width, scene.camera.height, width);
-    let chunks = samples.div_ceil(CHUNK) as usize;
-    let stats = driver::run(&mut film, chunks, stage, progress, |c, tile, stats| {
-        let c = c as u64;
-        let mut st = state();
-        let mut counters = TraceCounters::default();
-        for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-            sample(&mut st, &mut counters, k, tile);
-        }
-        stats.exhausted_rays += counters.exhausted;
-    });
+    let stats = run(&mut film);
     film.add_mean_to(samples, radiance, coverage);
     stats
 }
@@ -92,12 +107,12 @@ pub(crate) fn finite_splat<S: Directions>(radiance: &Vec3<S>, coverage: S) -> bo
 
 /// Splats `radiance` and `coverage` at film point `(px, py)` to every pixel whose filter covers it,
 /// weighted by that filter.
-pub(crate) fn splat_on_film<S: Directions>(
+pub(crate) fn splat_on_film<S: Scalar>(
     scene: &Scene,
     (px, py): (f32, f32),
     radiance: Vec3<S>,
     coverage: S,
-    tile: &mut SplatTile<S>,
+    tile: &mut impl SampleSink<S>,
 ) {
     let camera = &scene.camera;
     splat_filtered(

@@ -105,11 +105,10 @@ use super::emitter_edges::{self, EmitterOutlines};
 use super::segment::is_silhouette_direction;
 use super::{
     accumulate_samples, attached_first_vertex, background_offset, background_radiance,
-    finite_splat, on_film, projection_jacobian, splat_on_film,
+    finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
 };
 use crate::error::Result;
-use crate::film::accumulate::SplatTile;
-use crate::film::{Image, Normalization};
+use crate::film::{Film, Image, Normalization, SampleSink};
 use crate::integrator::attach::{SceneAttach, for_each_window};
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
@@ -265,10 +264,35 @@ fn pass<S: Directions>(
     if curves.is_empty() {
         return (images, coverage, RenderStats::default());
     }
-    let attach = SceneAttach::new(scene);
-    let stats = accumulate_samples::<S, _>(
+    let stats = accumulate_samples::<S>(
         scene,
         width,
+        samples,
+        |film| run_curves::<S, _>(scene, curves, seed, samples, progress, film),
+        &mut images,
+        &mut coverage,
+    );
+    (images, coverage, stats)
+}
+
+/// The silhouette samples `0..samples` into any film (their shares not yet divided by `samples`).
+pub(crate) fn run_curves<S: Directions, F: Film>(
+    scene: &Scene,
+    curves: &[(usize, SilhouetteCurve)],
+    seed: u64,
+    samples: u64,
+    progress: &Progress,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    if curves.is_empty() {
+        return RenderStats::default();
+    }
+    let attach = SceneAttach::new(scene);
+    run_samples::<S, F, _>(
+        film,
         samples,
         ("primary", progress),
         PathRecord::default,
@@ -284,10 +308,7 @@ fn pass<S: Directions>(
                 counters,
             );
         },
-        &mut images,
-        &mut coverage,
-    );
-    (images, coverage, stats)
+    )
 }
 
 /// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
@@ -297,7 +318,7 @@ fn sample<S: Directions>(
     curves: &[(usize, SilhouetteCurve)],
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut SplatTile<S>,
+    splats: &mut impl SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
     let k = curves.len();

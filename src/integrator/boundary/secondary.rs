@@ -121,10 +121,9 @@
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{accumulate_samples, finite_splat, splat_on_film};
+use super::{accumulate_samples, finite_splat, run_samples, splat_on_film};
 use crate::error::Result;
-use crate::film::Image;
-use crate::film::accumulate::SplatTile;
+use crate::film::{Film, Image, SampleSink};
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::attach::for_each_window;
 use crate::integrator::driver::RenderStats;
@@ -223,6 +222,30 @@ fn pass<S: Directions>(
     progress: &Progress,
 ) -> (Vec<Image>, RenderStats) {
     let (w, h) = (scene.camera.width, scene.camera.height);
+    let mut images = vec![Image::new(w, h); width];
+    let stats = accumulate_samples::<S>(
+        scene,
+        width,
+        samples,
+        |film| run_segments::<S, _>(scene, seed, samples, tangent, progress, film),
+        &mut images,
+        &mut [],
+    );
+    (images, stats)
+}
+
+/// The boundary samples `0..samples` into any film (their shares not yet divided by `samples`).
+pub(crate) fn run_segments<S: Directions, F: Film>(
+    scene: &Scene,
+    seed: u64,
+    samples: u64,
+    tangent: TangentSampling,
+    progress: &Progress,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
     let candidates: Vec<usize> = (0..scene.shapes.len())
         .filter(|&i| {
             // Flat shapes have no silhouette directions (κ_n = 0): sampling them would waste samples.
@@ -230,9 +253,8 @@ fn pass<S: Directions>(
             b.is_finite() && !b.is_empty() && !scene.shapes[i].sdf.is_piecewise_flat()
         })
         .collect();
-    let mut images = vec![Image::new(w, h); width];
     if candidates.is_empty() {
-        return (images, RenderStats::default());
+        return RenderStats::default();
     }
     let ctx = Context {
         scene,
@@ -240,9 +262,8 @@ fn pass<S: Directions>(
         candidates,
         tangent: TangentSampler::new(scene, tangent),
     };
-    let stats = accumulate_samples::<S, _>(
-        scene,
-        width,
+    run_samples::<S, F, _>(
+        film,
         samples,
         ("secondary", progress),
         Vec::new,
@@ -250,10 +271,7 @@ fn pass<S: Directions>(
             let mut sampler = Sampler::new(seed, BOUNDARY_STREAM, 0, k);
             ctx.sample(&mut sampler, hits, splats, counters);
         },
-        &mut images,
-        &mut [],
-    );
-    (images, stats)
+    )
 }
 
 /// What every boundary sample needs.
@@ -295,7 +313,7 @@ impl Context<'_> {
         &self,
         sampler: &mut Sampler,
         hits: &mut Vec<SurfaceSample>,
-        splats: &mut SplatTile<S>,
+        splats: &mut impl SampleSink<S>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;
@@ -356,7 +374,7 @@ impl Context<'_> {
         s_end: &Intersection,
         d_end: &Intersection,
         weight: f32,
-        splats: &mut SplatTile<S>,
+        splats: &mut impl SampleSink<S>,
         counters: &mut TraceCounters,
     ) {
         let scene = self.scene;

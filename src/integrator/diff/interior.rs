@@ -32,7 +32,7 @@
 
 use crate::camera::CameraFrame;
 use crate::error::Result;
-use crate::film::{Filter, Image, PixelFilm, SampleSink};
+use crate::film::{Film, Filter, Image, PixelFilm, SampleSink};
 use crate::integrator::attach::{SceneAttach, for_each_window};
 use crate::integrator::driver::{self, RenderStats};
 use crate::integrator::options::{DiffOptions, require_continuous_filter};
@@ -58,7 +58,7 @@ pub fn render_interior_in<S: Directions>(
             scene.camera.height,
             PixelFilm::<S>::splat_reach(scene.camera.filter.radius()),
         );
-        let stats = pass::<S>(windowed, width, options, &mut film);
+        let stats = pass::<S, _>(windowed, width, options, &mut film);
         (film, width, stats)
     });
     let mut image = None;
@@ -79,18 +79,20 @@ pub fn render_interior_in<S: Directions>(
 }
 
 /// One pass: every camera sample into `film`, derivatives in directions `0..width` of `S`.
-fn pass<S: Directions>(
+pub(crate) fn pass<S: Directions, F: Film>(
     scene: &Scene,
     width: usize,
     options: &DiffOptions,
-    film: &mut PixelFilm<S>,
-) -> RenderStats {
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (wi, hi) = (w as i64, h as i64);
     let spp = options.render.spp.max(1);
     let seed = options.render.seed;
     let frame32 = scene.camera.frame::<f32>();
-    let frame = scene.camera.frame::<S>();
     let attach = SceneAttach::new(scene);
     let filter = scene.camera.filter;
     driver::run(
@@ -100,12 +102,15 @@ fn pass<S: Directions>(
         &options.render.progress,
         |y, tile, stats| {
             let y = y as u32;
+            // Per item, not per pass: a reverse-mode tape holds the values of its own thread only.
+            let frame = scene.camera.frame::<S>();
             let mut record = PathRecord::default();
             let mut counters = TraceCounters::default();
             for x in 0..w {
                 let pixel = (y * w + x) as usize;
                 let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 for s in 0..spp {
+                    tile.begin_sample();
                     let (offset, ray) =
                         trace_sample(scene, &frame32, seed, x, y, s, &mut record, &mut counters);
                     let (mut l, first) = contribution_parts::<S, _>(scene, &record, &attach);
@@ -148,19 +153,19 @@ fn pass<S: Directions>(
                         _ => S::zero(),
                     };
                     tile.add_own(pixel, l, j1);
-                    let Some((px, py, scale)) = motion.filter(|_| ok) else {
-                        continue;
-                    };
-                    // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
-                    let lp = Vec3::<S>::constant(l.primal());
-                    let p = glam::Vec2::new(px.primal(), py.primal());
-                    for (jx, jy) in filter.footprint(p, w, h) {
-                        let dx = px - (jx as f32 + 0.5);
-                        let dy = py - (jy as f32 + 0.5);
-                        let weight = filter.eval(dx, dy) * scale;
-                        let dw = weight - weight.detach();
-                        tile.add_splat((jy * w + jx) as usize, lp * dw, dw);
+                    if let Some((px, py, scale)) = motion.filter(|_| ok) {
+                        // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
+                        let lp = Vec3::<S>::constant(l.primal());
+                        let p = glam::Vec2::new(px.primal(), py.primal());
+                        for (jx, jy) in filter.footprint(p, w, h) {
+                            let dx = px - (jx as f32 + 0.5);
+                            let dy = py - (jy as f32 + 0.5);
+                            let weight = filter.eval(dx, dy) * scale;
+                            let dw = weight - weight.detach();
+                            tile.add_splat((jy * w + jx) as usize, lp * dw, dw);
+                        }
                     }
+                    tile.end_sample();
                 }
             }
             stats.exhausted_rays += counters.exhausted;

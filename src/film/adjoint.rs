@@ -1,0 +1,149 @@
+//! The reverse-mode film: instead of accumulating an image, each sample's shares of the pixels become
+//! one scalar, `s = scale · Σ_j g_j · (ΔF_j − I_j ΔW_j)` (`g` the pixel adjoint `∂L/∂I`, `I` the image
+//! of the same samples, which enters as a constant; the `W` part only with the differentiable
+//! normalisation, supplemental document §3), which is swept backwards through the sample's tape into the
+//! gradient. Since every estimator's derivative image is `scale · Σ_samples (ΔF − I ΔW)`, the sum of
+//! these sweeps is `Σ_j g_j · ∂I_j = ∂L` by linearity.
+//!
+//! Each work item has a dense `f32` gradient buffer; buffers are merged in item order into an `f64`
+//! total, so the gradient is the same whatever the number of threads. A sample whose gradient is not
+//! finite is dropped and counted, as forward mode does with its derivatives.
+
+use super::accumulate::{Film, SampleSink};
+use super::{Image, Normalization};
+use crate::math::Vec3;
+use crate::scalar::{Mark, Recording, Rev, Scalar};
+
+/// A reverse-mode film over a `width × height` image.
+pub struct AdjointFilm<'a> {
+    adjoint: &'a [f32],
+    image: Option<&'a [f32]>,
+    scale: f32,
+    entries: usize,
+    /// The gradient so far, one entry per parameter slot (named parameters, then grid blocks).
+    pub gradient: Vec<f64>,
+    /// Samples whose gradient was not finite (dropped).
+    pub invalid: u64,
+}
+
+/// One work item of an [`AdjointFilm`].
+pub struct AdjointTile<'a> {
+    adjoint: &'a [f32],
+    image: Option<&'a [f32]>,
+    scale: f32,
+    mark: Mark,
+    sum: Rev,
+    shares: Vec<(u32, f32)>,
+    gradient: Vec<f32>,
+    invalid: u64,
+}
+
+impl<'a> AdjointFilm<'a> {
+    /// A film for the pixel adjoint `adjoint` (`∂L/∂I`, same size as the image), the image `image` of
+    /// the same samples (used with `Differentiable` normalisation), each sample's shares multiplied by
+    /// `scale` (`1/spp`, or `1/N` for `N` boundary samples), and `entries` gradient entries.
+    pub fn new(
+        adjoint: &'a Image,
+        image: &'a Image,
+        normalization: Normalization,
+        scale: f32,
+        entries: usize,
+    ) -> Self {
+        Self {
+            adjoint: &adjoint.rgb,
+            image: (normalization == Normalization::Differentiable).then_some(&image.rgb[..]),
+            scale,
+            entries,
+            gradient: vec![0.0; entries],
+            invalid: 0,
+        }
+    }
+}
+
+impl<'a> Film for AdjointFilm<'a> {
+    type Tile = AdjointTile<'a>;
+
+    fn tile(&self, _item: usize) -> AdjointTile<'a> {
+        AdjointTile {
+            adjoint: self.adjoint,
+            image: self.image,
+            scale: self.scale,
+            mark: Mark::default(),
+            sum: Rev::zero(),
+            shares: Vec::new(),
+            gradient: vec![0.0; self.entries],
+            invalid: 0,
+        }
+    }
+
+    fn merge(&mut self, _item: usize, tile: AdjointTile<'a>) {
+        for (total, g) in self.gradient.iter_mut().zip(&tile.gradient) {
+            *total += *g as f64;
+        }
+        self.invalid += tile.invalid;
+    }
+
+    fn run_item<R>(&self, work: impl FnOnce() -> R) -> R {
+        let _recording = Recording::start();
+        work()
+    }
+
+    fn wave(&self) -> usize {
+        4 * rayon::current_num_threads()
+    }
+}
+
+impl AdjointTile<'_> {
+    /// Adds `scale · g_j · (radiance − I_j weight)` to the sample's scalar.
+    #[inline]
+    fn add(&mut self, pixel: usize, radiance: Vec3<Rev>, weight: Rev) {
+        let g = &self.adjoint[3 * pixel..3 * pixel + 3];
+        if g == [0.0; 3] {
+            return;
+        }
+        let k = self.scale;
+        let gi = self.image.map_or(0.0, |i| {
+            let i = &i[3 * pixel..3 * pixel + 3];
+            g[0] * i[0] + g[1] * i[1] + g[2] * i[2]
+        });
+        self.sum = Rev::linear_combination(&[
+            (self.sum, 1.0),
+            (radiance.x, g[0] * k),
+            (radiance.y, g[1] * k),
+            (radiance.z, g[2] * k),
+            (weight, -gi * k),
+        ]);
+    }
+}
+
+impl SampleSink<Rev> for AdjointTile<'_> {
+    #[inline]
+    fn add_own(&mut self, pixel: usize, radiance: Vec3<Rev>, weight: Rev) {
+        self.add(pixel, radiance, weight);
+    }
+
+    #[inline]
+    fn add_splat(&mut self, pixel: usize, radiance: Vec3<Rev>, weight: Rev) {
+        self.add(pixel, radiance, weight);
+    }
+
+    fn begin_sample(&mut self) {
+        self.mark = Recording::mark();
+        self.sum = Rev::zero();
+    }
+
+    fn end_sample(&mut self) {
+        self.shares.clear();
+        let shares = &mut self.shares;
+        Recording::sweep(self.sum, |entry, d| shares.push((entry, d)));
+        if self.shares.iter().all(|(_, d)| d.is_finite()) {
+            for &(entry, d) in &self.shares {
+                self.gradient[entry as usize] += d;
+            }
+        } else {
+            self.invalid += 1;
+        }
+        self.sum = Rev::zero();
+        Recording::rewind(self.mark);
+    }
+}

@@ -1,0 +1,257 @@
+//! Reverse mode: the gradient of one scalar loss of the image with respect to every selected parameter
+//! at once, grid values included, with the complete derivative (interior + primary + secondary terms).
+//!
+//! Every estimator runs exactly as for derivative images, with the reverse-mode [`Rev`] as its number
+//! type and an [`AdjointFilm`] in place of an image: each sample's shares of the pixels become the scalar
+//! `Σ_j g_j · (its contribution to pixel j)`, swept backwards into the gradient. The result is
+//! `Σ_j g_j · ∂I_j`, term by term the dot product of the pixel adjoint with forward mode's derivative
+//! images of the same samples.
+//!
+//! **Two seeds.** For a loss `L(I)`, the adjoint `g = ∂L/∂I` depends on the image; estimating `I` in `g`
+//! and `∂I` with the same samples biases the gradient of a nonlinear loss (for L2, by the covariance of
+//! the two). [`loss_gradient`] renders the loss pass with `seed` and the adjoint pass with `seed + 1`.
+//! The adjoint pass's own image (the primal of seed `seed + 1`) is what the differentiable pixel
+//! normalisation subtracts (`∂F − I ∂W`), as forward mode does.
+
+pub mod loss;
+
+pub use loss::Loss;
+
+use crate::error::{Error, Result};
+use crate::film::{AdjointFilm, Image, Normalization};
+use crate::integrator::boundary::emitter_edges::{self, EmitterOutlines, run_outlines};
+use crate::integrator::boundary::primary::{run_curves, silhouettes};
+use crate::integrator::boundary::secondary::run_segments;
+use crate::integrator::boundary::tangent_sampling::TangentSampling;
+use crate::integrator::diff::interior;
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::{DiffOptions, RenderOptions, require_continuous_filter};
+use crate::integrator::primal::render;
+use crate::scalar::{GridValues, MAX_GRADIENT_ENTRY, Rev};
+use crate::scene::{GridBlock, Scene};
+
+/// Where each selected parameter sits in the gradient: named parameters first (entry `k` for the `k`-th
+/// name), then each selected grid's values as a block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GradientLayout {
+    /// The named parameters, in entry order.
+    pub params: Vec<String>,
+    /// The selected grids with the entry of their first value.
+    pub grids: Vec<(GridBlock, usize)>,
+    /// Total number of entries.
+    pub entries: usize,
+}
+
+impl GradientLayout {
+    /// Selects `params` (names as [`Scene::parameters`] lists them) and the values of the grid nodes
+    /// `grids` (as [`Scene::grid_blocks`] lists them) of `scene` for reverse mode. Errors: unknown or
+    /// repeated names; more entries than a gradient can index. On error the scene may be partly
+    /// selected.
+    pub fn select(scene: &mut Scene, params: &[String], grids: &[String]) -> Result<Self> {
+        scene.select_parameters(params)?;
+        let blocks = scene.grid_blocks();
+        let mut entries = params.len();
+        let mut chosen = Vec::new();
+        let mut selection = Vec::new();
+        for node in grids {
+            // Unknown and repeated nodes are reported by `select_grids` below.
+            if let Some(block) = blocks.iter().find(|b| &b.node == node)
+                && !chosen
+                    .iter()
+                    .any(|(b, _): &(GridBlock, usize)| &b.node == node)
+            {
+                chosen.push((block.clone(), entries));
+                selection.push((
+                    node.clone(),
+                    GridValues::Gradient {
+                        first: entries as u32,
+                    },
+                ));
+                entries += block.len();
+            } else {
+                selection.push((node.clone(), GridValues::Constant));
+            }
+            if entries > MAX_GRADIENT_ENTRY as usize {
+                return Err(Error::field(
+                    "--grid",
+                    format!("{entries} gradient entries is more than reverse mode can index"),
+                ));
+            }
+        }
+        scene.select_grids(&selection)?;
+        Ok(Self {
+            params: params.to_vec(),
+            grids: chosen,
+            entries,
+        })
+    }
+}
+
+/// The gradient of `Σ_j g_j · I_j` (for a pixel adjoint `g`), term by term, indexed by a
+/// [`GradientLayout`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradient {
+    /// The interior term.
+    pub interior: Vec<f64>,
+    /// The primary boundary term (silhouettes and emitter outlines seen by the camera); zeros when its
+    /// budget is 0.
+    pub primary: Vec<f64>,
+    /// The secondary boundary term (shadows); zeros when its budget is 0.
+    pub secondary: Vec<f64>,
+    /// Counters (`invalid_derivatives`: samples whose gradient was not finite, dropped).
+    pub stats: RenderStats,
+}
+
+impl Gradient {
+    /// The complete gradient: the sum of the three terms.
+    pub fn total(&self) -> Vec<f64> {
+        (0..self.interior.len())
+            .map(|i| self.interior[i] + self.primary[i] + self.secondary[i])
+            .collect()
+    }
+}
+
+/// The gradient of `Σ_j g_j · I_j` with respect to the parameters of `layout` (selected in `scene` by
+/// [`GradientLayout::select`]), `g` = `adjoint`, with the samples of `options.render` (seed, spp) and
+/// the boundary budgets of `options.boundary`: `Σ_j g_j · ∂I_j` for the complete derivative images of
+/// the same seed. Errors: a box pixel filter, an adjoint of another size, a failed silhouette extraction.
+pub fn render_gradient(
+    scene: &Scene,
+    layout: &GradientLayout,
+    adjoint: &Image,
+    options: &DiffOptions,
+) -> Result<Gradient> {
+    require_continuous_filter(scene, "reverse mode")?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    if (adjoint.width, adjoint.height) != (w, h) {
+        return Err(Error::field(
+            "adjoint",
+            format!(
+                "the adjoint image is {}x{}, the image {w}x{h}",
+                adjoint.width, adjoint.height
+            ),
+        ));
+    }
+    let start = std::time::Instant::now();
+    let n = layout.entries;
+    let render_options = &options.render;
+    let spp = render_options.spp.max(1);
+    let norm = options.normalization;
+    // The image of the same samples: what the differentiable normalisation subtracts.
+    let (image, mut stats) = match norm {
+        Normalization::Differentiable => render(scene, render_options),
+        Normalization::Fixed => (Image::new(w, h), RenderStats::default()),
+    };
+    let film = |scale: f32| AdjointFilm::new(adjoint, &image, norm, scale, n);
+    let mut invalid = 0;
+    let mut interior_film = film(1.0 / spp as f32);
+    let s = interior::pass::<Rev, _>(scene, 0, options, &mut interior_film);
+    stats.absorb(s);
+    invalid += interior_film.invalid;
+    let (n_primary, n_secondary) = options.boundary.totals(scene, spp);
+    let mut primary = vec![0.0; n];
+    if n_primary > 0 {
+        let curves = silhouettes(scene)?;
+        let outlines = EmitterOutlines::seen_from(scene);
+        let (n_curves, n_outlines) =
+            emitter_edges::split_samples(n_primary, !curves.is_empty(), !outlines.is_empty());
+        let seed = render_options.seed;
+        let progress = &render_options.progress;
+        for (samples, is_curves) in [(n_curves, true), (n_outlines, false)] {
+            if samples == 0 {
+                continue;
+            }
+            let mut f = film(1.0 / samples as f32);
+            let s = if is_curves {
+                run_curves::<Rev, _>(scene, &curves, seed, samples, progress, &mut f)
+            } else {
+                run_outlines::<Rev, _>(scene, &outlines, render_options, samples, &mut f)
+            };
+            stats.absorb(s);
+            invalid += f.invalid;
+            add(&mut primary, &f.gradient);
+        }
+    }
+    let mut secondary = vec![0.0; n];
+    if n_secondary > 0 {
+        let mut f = film(1.0 / n_secondary as f32);
+        let s = run_segments::<Rev, _>(
+            scene,
+            render_options.seed,
+            n_secondary,
+            TangentSampling::Steered,
+            &render_options.progress,
+            &mut f,
+        );
+        stats.absorb(s);
+        invalid += f.invalid;
+        secondary = f.gradient;
+    }
+    stats.invalid_derivatives += invalid;
+    if invalid > 0 && stats.first_invalid.is_none() {
+        stats.first_invalid = Some(format!(
+            "{invalid} samples with a non-finite gradient (dropped)"
+        ));
+    }
+    stats.samples = spp as u64 * w as u64 * h as u64;
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(Gradient {
+        interior: interior_film.gradient,
+        primary,
+        secondary,
+        stats,
+    })
+}
+
+/// `total += part`, entry by entry.
+fn add(total: &mut [f64], part: &[f64]) {
+    for (t, p) in total.iter_mut().zip(part) {
+        *t += p;
+    }
+}
+
+/// A loss, its gradient, and the image of the loss pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LossGradient {
+    /// The loss of the loss pass's image against the target.
+    pub loss: f64,
+    /// The loss pass's image (seed `seed`).
+    pub image: Image,
+    /// The gradient of the loss, from the adjoint pass (seed `seed + 1`).
+    pub gradient: Gradient,
+}
+
+/// The seed of the adjoint pass for a loss pass of seed `seed` (module docs, "Two seeds").
+pub fn adjoint_seed(seed: u64) -> u64 {
+    seed.wrapping_add(1)
+}
+
+/// The loss of `scene`'s image against `target` and its gradient with respect to the parameters of
+/// `layout`: the loss pass renders with `options.render.seed`, the adjoint pass ([`render_gradient`])
+/// with [`adjoint_seed`] of it. Errors: a target of another size, and those of [`render_gradient`].
+pub fn loss_gradient(
+    scene: &Scene,
+    layout: &GradientLayout,
+    target: &Image,
+    loss: Loss,
+    options: &DiffOptions,
+) -> Result<LossGradient> {
+    let start = std::time::Instant::now();
+    let (image, loss_stats) = render(scene, &options.render);
+    let (value, adjoint) = loss.evaluate(&image, target, "--target")?;
+    let adjoint_options = DiffOptions {
+        render: RenderOptions {
+            seed: adjoint_seed(options.render.seed),
+            ..options.render.clone()
+        },
+        ..options.clone()
+    };
+    let mut gradient = render_gradient(scene, layout, &adjoint, &adjoint_options)?;
+    gradient.stats.absorb(loss_stats);
+    gradient.stats.seconds = start.elapsed().as_secs_f64();
+    Ok(LossGradient {
+        loss: value,
+        image,
+        gradient,
+    })
+}

@@ -1,0 +1,463 @@
+//! [`Rev`]: reverse-mode differentiation on a per-thread tape (the Adept / echidna pattern).
+//!
+//! A `Rev` is a `Copy` handle: its primal value and the index of the tape node that computed it (or a
+//! marker for a constant, or the gradient entry of a scene parameter it was lifted from). Each operation
+//! on non-constant operands appends one node to the calling thread's tape, recording its operands and
+//! the local partials from [`super::rules`], the same table the forward-mode types read, so forward and
+//! reverse rules cannot drift apart. Operations on constants record nothing.
+//!
+//! One sample of an estimator is recorded, turned into one scalar (the sample's share of
+//! `Σ_pixels g · I`), and swept backwards once ([`Recording::sweep`]): every node's adjoint times its
+//! partials flows to its operands, and parameter operands hand their share to the caller. The tape is
+//! then rewound for the next sample. A grid's B-spline sum is one node with its 64 values as operands
+//! ([`Scalar::lattice_sum`]), so grids of hundreds of thousands of values cost no leaves.
+//!
+//! A tape belongs to a thread, so a [`Recording`] must not be interleaved with another on the same thread
+//! (as when a rayon task, started from inside a recording, is stolen by the recording thread):
+//! [`Recording::start`] refuses to start while one is active.
+
+use super::lattice::{LatticeTaps, lattice_sum_nested};
+use super::{Scalar, Slot, rules};
+use std::cell::RefCell;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// The index of a constant.
+const CONSTANT: u32 = u32::MAX;
+/// The flag of a parameter reference: `PARAM | k` is gradient entry `k`.
+const PARAM: u32 = 1 << 31;
+/// The largest gradient entry a parameter may have.
+pub const MAX_GRADIENT_ENTRY: u32 = PARAM - 2;
+
+/// A reverse-mode number: a primal value and where it came from (a tape node, a parameter, or nowhere).
+///
+/// Comparisons in [`Scalar`]'s defaults look at the primal only, as for every scalar type. Values must
+/// not outlive the sample (the [`Recording::rewind`]) they were computed in.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Rev {
+    v: f32,
+    i: u32,
+}
+
+/// One thread's tape: per node the end of its operand list, and the operands (node index or
+/// `PARAM | entry`) with their partials.
+struct Tape {
+    ends: Vec<u32>,
+    targets: Vec<u32>,
+    partials: Vec<f32>,
+    adjoints: Vec<f32>,
+    active: bool,
+}
+
+thread_local! {
+    static TAPE: RefCell<Tape> = const {
+        RefCell::new(Tape {
+            ends: Vec::new(),
+            targets: Vec::new(),
+            partials: Vec::new(),
+            adjoints: Vec::new(),
+            active: false,
+        })
+    };
+}
+
+impl Tape {
+    #[inline(always)]
+    fn node(&mut self) -> u32 {
+        self.ends.push(self.targets.len() as u32);
+        (self.ends.len() - 1) as u32
+    }
+    #[inline(always)]
+    fn operand(&mut self, target: u32, partial: f32) {
+        self.targets.push(target);
+        self.partials.push(partial);
+    }
+}
+
+impl Rev {
+    /// A constant.
+    #[inline(always)]
+    pub const fn new(v: f32) -> Self {
+        Self { v, i: CONSTANT }
+    }
+
+    /// The parameter with gradient entry `entry` (at most [`MAX_GRADIENT_ENTRY`]) and value `v`.
+    #[inline(always)]
+    pub fn parameter(v: f32, entry: u32) -> Self {
+        assert!(
+            entry <= MAX_GRADIENT_ENTRY,
+            "gradient entry {entry} out of range"
+        );
+        Self {
+            v,
+            i: PARAM | entry,
+        }
+    }
+
+    /// Whether this value depends on nothing recorded.
+    #[inline(always)]
+    pub fn is_constant(self) -> bool {
+        self.i == CONSTANT
+    }
+
+    /// A node with value `v` and operands `(x, ∂/∂x)`; a constant if every operand is.
+    #[inline(always)]
+    fn record(v: f32, operands: &[(Rev, f32)]) -> Self {
+        if operands.iter().all(|(x, _)| x.i == CONSTANT) {
+            return Self::new(v);
+        }
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            for &(x, d) in operands {
+                if x.i != CONSTANT {
+                    t.operand(x.i, d);
+                }
+            }
+            let i = t.node();
+            Self { v, i }
+        })
+    }
+
+    #[inline(always)]
+    fn unary(self, (v, d): (f32, f32)) -> Self {
+        Self::record(v, &[(self, d)])
+    }
+
+    #[inline(always)]
+    fn binary(self, o: Self, (v, dx, dy): (f32, f32, f32)) -> Self {
+        Self::record(v, &[(self, dx), (o, dy)])
+    }
+
+    /// `Σ_k c_k x_k` as one node (e.g. a sample's share of `Σ_pixels g · I`).
+    pub fn linear_combination(terms: &[(Rev, f32)]) -> Self {
+        let v = terms.iter().fold(0.0, |acc, &(x, c)| acc + c * x.v);
+        Self::record(v, terms)
+    }
+}
+
+/// The recording on this thread's tape: while it lives, [`Rev`] operations on this thread are recorded;
+/// [`Recording::mark`], [`Recording::rewind`] and [`Recording::sweep`] act on the tape of the calling
+/// thread's active recording. Dropping it clears the tape.
+///
+/// Not `Send`: it belongs to the thread whose tape it holds.
+pub struct Recording {
+    _thread: std::marker::PhantomData<*const ()>,
+}
+
+/// A position on the tape to rewind to ([`Recording::mark`]).
+#[derive(Copy, Clone, Debug, Default)]
+pub struct Mark {
+    nodes: usize,
+    operands: usize,
+}
+
+impl Recording {
+    /// Starts recording on this thread with an empty tape.
+    ///
+    /// Panics if a recording is already active on this thread: two interleaved recordings would
+    /// corrupt each other's tape (a parallel task must not start inside a recording).
+    pub fn start() -> Self {
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            assert!(
+                !t.active,
+                "a reverse-mode recording is already active on this thread (was a parallel task \
+                 started inside a recording?)"
+            );
+            t.active = true;
+            t.ends.clear();
+            t.targets.clear();
+            t.partials.clear();
+        });
+        Self {
+            _thread: std::marker::PhantomData,
+        }
+    }
+
+    /// Whether a recording is active on this thread.
+    pub fn is_active() -> bool {
+        TAPE.with(|t| t.borrow().active)
+    }
+
+    /// The current end of this thread's tape.
+    pub fn mark() -> Mark {
+        TAPE.with(|t| {
+            let t = t.borrow();
+            Mark {
+                nodes: t.ends.len(),
+                operands: t.targets.len(),
+            }
+        })
+    }
+
+    /// Forgets every node recorded after `mark` (values computed since then become invalid).
+    pub fn rewind(mark: Mark) {
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            t.ends.truncate(mark.nodes);
+            t.targets.truncate(mark.operands);
+            t.partials.truncate(mark.operands);
+        });
+    }
+
+    /// Nodes on this thread's tape now (for memory accounting).
+    pub fn len() -> usize {
+        TAPE.with(|t| t.borrow().ends.len())
+    }
+
+    /// The gradient of `root`: calls `out(entry, ∂root/∂parameter)` for every parameter operand reached
+    /// (an entry may be reported several times; the caller sums), sweeping this thread's tape backwards
+    /// once. Nodes whose adjoint is zero are skipped, so an infinite partial behind a zero adjoint gives
+    /// no NaN.
+    pub fn sweep(root: Rev, mut out: impl FnMut(u32, f32)) {
+        if root.i == CONSTANT {
+            return;
+        }
+        if root.i & PARAM != 0 {
+            out(root.i & !PARAM, 1.0);
+            return;
+        }
+        TAPE.with(|t| {
+            let t = &mut *t.borrow_mut();
+            let n = root.i as usize + 1;
+            t.adjoints.clear();
+            t.adjoints.resize(n, 0.0);
+            t.adjoints[n - 1] = 1.0;
+            for node in (0..n).rev() {
+                let a = t.adjoints[node];
+                if a == 0.0 {
+                    continue;
+                }
+                let start = if node == 0 {
+                    0
+                } else {
+                    t.ends[node - 1] as usize
+                };
+                for op in start..t.ends[node] as usize {
+                    let (target, d) = (t.targets[op], a * t.partials[op]);
+                    if target & PARAM != 0 {
+                        out(target & !PARAM, d);
+                    } else {
+                        t.adjoints[target as usize] += d;
+                    }
+                }
+            }
+        });
+    }
+}
+
+impl Drop for Recording {
+    fn drop(&mut self) {
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            t.active = false;
+            t.ends.clear();
+            t.targets.clear();
+            t.partials.clear();
+        });
+    }
+}
+
+impl Add for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self.binary(o, (self.v + o.v, 1.0, 1.0))
+    }
+}
+
+impl Sub for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        self.binary(o, (self.v - o.v, 1.0, -1.0))
+    }
+}
+
+impl Mul for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self.binary(o, rules::mul(self.v, o.v))
+    }
+}
+
+impl Div for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        self.binary(o, rules::div(self.v, o.v))
+    }
+}
+
+impl Neg for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.unary((-self.v, -1.0))
+    }
+}
+
+// Mixed operations with a constant `f32`, with the primal arithmetic of `DualN`'s.
+impl Add<f32> for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, c: f32) -> Self {
+        self.unary((self.v + c, 1.0))
+    }
+}
+
+impl Sub<f32> for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, c: f32) -> Self {
+        self.unary((self.v - c, 1.0))
+    }
+}
+
+impl Mul<f32> for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, c: f32) -> Self {
+        self.unary((self.v * c, c))
+    }
+}
+
+impl Div<f32> for Rev {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, c: f32) -> Self {
+        self.unary((self.v / c, 1.0 / c))
+    }
+}
+
+macro_rules! assign_ops {
+    ($($tr:ident $m:ident $op:tt),*) => {$(
+        impl $tr for Rev {
+            #[inline(always)]
+            fn $m(&mut self, o: Self) {
+                *self = *self $op o;
+            }
+        }
+    )*};
+}
+assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
+
+impl Scalar for Rev {
+    #[inline(always)]
+    fn constant(v: f32) -> Self {
+        Self::new(v)
+    }
+    #[inline(always)]
+    fn primal(self) -> f32 {
+        self.v
+    }
+    /// Slot `k` is gradient entry `k`; `None` is a constant.
+    #[inline(always)]
+    fn lift(value: f32, slot: Slot) -> Self {
+        match slot {
+            Some(k) => Self::parameter(value, k),
+            None => Self::new(value),
+        }
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.unary(rules::sqrt(self.v))
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        self.unary(rules::exp(self.v))
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        self.unary(rules::ln(self.v))
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        self.unary(rules::sin(self.v))
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        self.unary(rules::cos(self.v))
+    }
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        self.binary(x, rules::atan2(self.v, x.v))
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        self.unary(rules::acos(self.v))
+    }
+    #[inline(always)]
+    fn powf(self, n: f32) -> Self {
+        self.unary(rules::powf(self.v, n))
+    }
+    #[inline(always)]
+    fn recip(self) -> Self {
+        self.unary(rules::recip(self.v))
+    }
+    #[inline(always)]
+    fn sqr(self) -> Self {
+        self.unary(rules::sqr(self.v))
+    }
+
+    /// One node: the primal is the nested `f32` sum (bit for bit the image's); its operands are the 64
+    /// values of block `block` (partial: the product of the three weights) and every non-constant
+    /// weight (partial: the sum over the other two axes). An axis whose weights are all constant zeros
+    /// (a spatial derivative along another axis) gives a constant 0 without recording.
+    fn lattice_sum(
+        taps: &LatticeTaps<Self>,
+        values: &[f32],
+        dims: [usize; 3],
+        block: Slot,
+    ) -> Self {
+        let [nx, ny, _] = dims;
+        if taps
+            .weight
+            .iter()
+            .any(|axis| axis.iter().all(|w| w.i == CONSTANT && w.v == 0.0))
+        {
+            return Self::new(0.0);
+        }
+        let primal = taps.map(|_, w| w.v);
+        let v = lattice_sum_nested::<f32>(&primal, values, nx, ny);
+        let moving = taps.weight.iter().flatten().any(|w| w.i != CONSTANT);
+        if block.is_none() && !moving {
+            return Self::new(v);
+        }
+        let [ix, iy, iz] = taps.index;
+        let [wx, wy, wz] = primal.weight;
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            if let Some(first) = block {
+                for c in 0..4 {
+                    for b in 0..4 {
+                        let wzy = wz[c] * wy[b];
+                        let row = (iz[c] * ny + iy[b]) * nx;
+                        for a in 0..4 {
+                            let entry = first as usize + row + ix[a];
+                            debug_assert!(entry <= MAX_GRADIENT_ENTRY as usize);
+                            t.operand(PARAM | entry as u32, wzy * wx[a]);
+                        }
+                    }
+                }
+            }
+            if moving {
+                // ∂/∂w_axis[k]: the sum with that axis's weights replaced by the unit vector e_k.
+                for axis in 0..3 {
+                    for k in 0..4 {
+                        let w = taps.weight[axis][k];
+                        if w.i == CONSTANT {
+                            continue;
+                        }
+                        let unit = primal.map(|a, x| if a == axis { 0.0 } else { x });
+                        let mut unit = unit;
+                        unit.weight[axis][k] = 1.0;
+                        t.operand(w.i, lattice_sum_nested::<f32>(&unit, values, nx, ny));
+                    }
+                }
+            }
+            let i = t.node();
+            Self { v, i }
+        })
+    }
+}

@@ -1,0 +1,216 @@
+//! Grid values as parameter blocks: the samples of every grid node are one block named
+//! `<node>.values` (`<node>` the node's prefix of [`Scene::parameters`], e.g. `blob.values`), listed once
+//! with its shape rather than value by value, selected as a whole for differentiation (a forward-mode
+//! direction or a reverse-mode gradient block) and replaceable in memory between renders.
+
+use super::params::root_prefix;
+use super::{Scene, Shape};
+use crate::error::{Error, Result};
+use crate::scalar::GridValues;
+use crate::sdf::{GridData, Sdf};
+use std::sync::Arc;
+
+/// One grid node's values as a parameter block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridBlock {
+    /// The node's prefix (`blob`): what `--grid` and `--grid-direction` take.
+    pub node: String,
+    /// The block's name, `<node>.values`.
+    pub name: String,
+    /// The `.npy` shape of the values, `[nz, ny, nx]`.
+    pub shape: [usize; 3],
+}
+
+impl GridBlock {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+    /// Whether the block has no values (never, for a valid grid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Generates the walk over the grid nodes of an sdf tree, shared or mutable: `f(prefix, data, selection)`
+/// with the node prefixes of [`Scene::parameters`].
+macro_rules! grid_walk {
+    ($walk:ident $(, $m:tt)?) => {
+        fn $walk(
+            sdf: &$($m)? Sdf,
+            prefix: &str,
+            f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? GridValues),
+        ) {
+            match sdf {
+                Sdf::Grid {
+                    data, selection, ..
+                } => f(prefix, data, selection),
+                Sdf::Union(children)
+                | Sdf::Intersection(children)
+                | Sdf::Difference(children)
+                | Sdf::SmoothUnion { children, .. } => {
+                    for (i, c) in IntoIterator::into_iter(children).enumerate() {
+                        $walk(c, &format!("{prefix}.children.{i}"), f);
+                    }
+                }
+                Sdf::Transform { child, .. } => $walk(child, &format!("{prefix}.child"), f),
+                Sdf::Named { name, child } => $walk(child, name, f),
+                Sdf::Sphere { .. }
+                | Sdf::Box { .. }
+                | Sdf::Torus { .. }
+                | Sdf::Cylinder { .. }
+                | Sdf::Capsule { .. }
+                | Sdf::Plane { .. } => {}
+            }
+        }
+    };
+}
+grid_walk!(walk);
+grid_walk!(walk_mut, mut);
+
+impl Sdf {
+    /// Whether some grid in the tree has its values selected for differentiation.
+    pub fn grid_values_selected(&self) -> bool {
+        let mut any = false;
+        walk(self, "", &mut |_, _, s| any |= *s != GridValues::Constant);
+        any
+    }
+
+    /// Calls `f` with every grid node's selection (to renumber or clear it).
+    pub fn visit_grid_selections_mut(&mut self, f: &mut dyn FnMut(&mut GridValues)) {
+        walk_mut(self, "", &mut |_, _, s| f(s));
+    }
+}
+
+impl Scene {
+    /// Every grid node's values as a block, in the order of [`Scene::parameters`].
+    pub fn grid_blocks(&self) -> Vec<GridBlock> {
+        let mut out = Vec::new();
+        for shape in &self.shapes {
+            walk(
+                &shape.sdf,
+                &root_prefix(&shape.name, &shape.sdf),
+                &mut |node, data, _| {
+                    let [nx, ny, nz] = data.dims;
+                    out.push(GridBlock {
+                        node: node.to_string(),
+                        name: format!("{node}.values"),
+                        shape: [nz, ny, nx],
+                    });
+                },
+            );
+        }
+        out
+    }
+
+    /// The values of grid node `node`. Errors: no grid node of that name (the message lists them).
+    pub fn grid_values(&self, node: &str) -> Result<Arc<GridData>> {
+        let mut found = None;
+        for shape in &self.shapes {
+            walk(
+                &shape.sdf,
+                &root_prefix(&shape.name, &shape.sdf),
+                &mut |n, data, _| {
+                    if n == node {
+                        found = Some(data.clone());
+                    }
+                },
+            );
+        }
+        found.ok_or_else(|| self.unknown_grid(node))
+    }
+
+    /// Replaces the values of grid node `node` (same layout: `values[(z · ny + y) · nx + x]`, as many
+    /// as before, all finite) and recomputes what depends on them (bounds, Lipschitz bounds, tracer
+    /// tolerance), keeping every selection: the next render sees the new surface.
+    pub fn set_grid_values(&mut self, node: &str, values: Vec<f32>) -> Result<()> {
+        let old = self.grid_values(node)?;
+        let data = GridData::new(old.dims, values, &format!("{node}.values"))?;
+        let data = Arc::new(data);
+        for shape in &mut self.shapes {
+            let prefix = root_prefix(&shape.name, &shape.sdf);
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, _| {
+                if n == node {
+                    *d = data.clone();
+                }
+            });
+        }
+        *self = self.refreshed();
+        Ok(())
+    }
+
+    /// Sets the selection of the grid nodes named in `selection` (`(node, how)`), every other grid's
+    /// to constant. Errors: an unknown node, a node given twice, a direction whose length is not the
+    /// grid's; on error the scene is unchanged.
+    pub fn select_grids(&mut self, selection: &[(String, GridValues)]) -> Result<()> {
+        let blocks = self.grid_blocks();
+        for (k, (node, how)) in selection.iter().enumerate() {
+            let Some(block) = blocks.iter().find(|b| &b.node == node) else {
+                return Err(self.unknown_grid(node));
+            };
+            if selection[..k].iter().any(|(n, _)| n == node) {
+                return Err(Error::field(
+                    "--grid",
+                    format!("grid {node:?} is given twice"),
+                ));
+            }
+            if let GridValues::Direction { u, .. } = how
+                && u.len() != block.len()
+            {
+                return Err(Error::field(
+                    format!("--grid-direction {node}"),
+                    format!(
+                        "the direction has {} values, the grid {} (shape {:?})",
+                        u.len(),
+                        block.len(),
+                        block.shape
+                    ),
+                ));
+            }
+        }
+        for shape in &mut self.shapes {
+            let prefix = root_prefix(&shape.name, &shape.sdf);
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, _, s| {
+                *s = selection
+                    .iter()
+                    .find(|(node, _)| node == n)
+                    .map_or(GridValues::Constant, |(_, how)| how.clone());
+            });
+        }
+        Ok(())
+    }
+
+    /// The error for an unknown grid node: the scene's grid nodes.
+    fn unknown_grid(&self, node: &str) -> Error {
+        let nodes: Vec<String> = self.grid_blocks().into_iter().map(|b| b.node).collect();
+        let known = if nodes.is_empty() {
+            "the scene has no grid".to_string()
+        } else {
+            format!("grid nodes: {}", nodes.join(", "))
+        };
+        Error::field("--grid", format!("no grid node {node:?} ({known})"))
+    }
+
+    /// The scene with its derived data (shape bounds and Lipschitz bounds, tracer tolerance)
+    /// recomputed from its shapes; tracer settings other than the tolerance kept.
+    pub(super) fn refreshed(&self) -> Scene {
+        let shapes = self
+            .shapes
+            .iter()
+            .cloned()
+            .map(|s| Shape::translated(s.name, s.sdf, s.bsdf, s.translate))
+            .collect();
+        let mut scene = Scene::new(
+            self.camera.clone(),
+            self.integrator,
+            self.spp,
+            shapes,
+            self.emitters.clone(),
+        );
+        scene.trace = crate::trace::TraceSettings {
+            eps: scene.trace.eps,
+            ..self.trace
+        };
+        scene
+    }
+}
