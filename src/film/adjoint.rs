@@ -3,7 +3,7 @@
 //! of the same samples, which enters as a constant; the `W` part only with the differentiable
 //! normalisation, supplemental document §3), which is swept backwards through the sample's tape into the
 //! gradient. Since every estimator's derivative image is `scale · Σ_samples (ΔF − I ΔW)`, the sum of
-//! these sweeps is `Σ_j g_j · ∂I_j = ∂L` by linearity.
+//! these sweeps is `Σ_j g_j · ∂I_j = ∂L` by linearity (docs/theory.md (10.2)).
 //!
 //! Each work item has a dense `f32` gradient buffer; buffers are merged in item order into an `f64`
 //! total, so the gradient is the same whatever the number of threads. A sample whose gradient is not

@@ -1,5 +1,6 @@
 //! Reverse mode: the gradient of one scalar loss of the image with respect to every selected parameter
-//! at once, grid values included, with the complete derivative (interior + primary + secondary terms).
+//! at once, grid values included, with the complete derivative (interior + primary + secondary terms)
+//! (docs/theory.md §10).
 //!
 //! Every estimator runs exactly as for derivative images, with the reverse-mode [`Rev`] as its number
 //! type and an [`AdjointFilm`] in place of an image: each sample's shares of the pixels become the scalar
@@ -10,8 +11,12 @@
 //! **Two seeds.** For a loss `L(I)`, the adjoint `g = ∂L/∂I` depends on the image; estimating `I` in `g`
 //! and `∂I` with the same samples biases the gradient of a nonlinear loss (for L2, by the covariance of
 //! the two). [`loss_gradient`] renders the loss pass with `seed` and the adjoint pass with `seed + 1`.
-//! The adjoint pass's own image (the primal of seed `seed + 1`) is what the differentiable pixel
-//! normalisation subtracts (`∂F − I ∂W`), as forward mode does.
+//!
+//! **The pixel value in `∂F − I ∂W`.** The differentiable normalisation subtracts `I_j ∂W_j`, a control
+//! variate whose expectation is zero for any constant `I_j` (`E[∂W_j] = 0` with `W`'s primary term).
+//! [`render_gradient`] uses the image of its own samples, as forward mode does, so that the two agree to
+//! rounding; [`loss_gradient`] uses the loss pass's image, independent of the adjoint pass's samples,
+//! which saves rendering the adjoint pass's image and keeps the gradient unbiased.
 
 pub mod loss;
 
@@ -114,11 +119,35 @@ impl Gradient {
 /// The gradient of `Σ_j g_j · I_j` with respect to the parameters of `layout` (selected in `scene` by
 /// [`GradientLayout::select`]), `g` = `adjoint`, with the samples of `options.render` (seed, spp) and
 /// the boundary budgets of `options.boundary`: `Σ_j g_j · ∂I_j` for the complete derivative images of
-/// the same seed. Errors: a box pixel filter, an adjoint of another size, a failed silhouette extraction.
+/// the same seed (with the differentiable normalisation, the image of the same samples is rendered
+/// first). Errors: a box pixel filter, an adjoint of another size, a failed silhouette extraction.
 pub fn render_gradient(
     scene: &Scene,
     layout: &GradientLayout,
     adjoint: &Image,
+    options: &DiffOptions,
+) -> Result<Gradient> {
+    let image = match options.normalization {
+        Normalization::Differentiable => Some(render(scene, &options.render)),
+        Normalization::Fixed => None,
+    };
+    let (image, stats) = image.unwrap_or_else(|| {
+        let blank = Image::new(scene.camera.width, scene.camera.height);
+        (blank, RenderStats::default())
+    });
+    let mut gradient = render_gradient_with_image(scene, layout, adjoint, &image, options)?;
+    gradient.stats.absorb(stats);
+    Ok(gradient)
+}
+
+/// [`render_gradient`] with the pixel values `image` in the differentiable normalisation's `∂F − I ∂W`
+/// (ignored with the fixed one): the adjoint pass's own image, or one independent of its samples
+/// (module docs). Errors as [`render_gradient`], and an image of another size.
+pub fn render_gradient_with_image(
+    scene: &Scene,
+    layout: &GradientLayout,
+    adjoint: &Image,
+    image: &Image,
     options: &DiffOptions,
 ) -> Result<Gradient> {
     require_continuous_filter(scene, "reverse mode")?;
@@ -132,17 +161,22 @@ pub fn render_gradient(
             ),
         ));
     }
+    let norm = options.normalization;
+    if norm == Normalization::Differentiable && (image.width, image.height) != (w, h) {
+        return Err(Error::field(
+            "image",
+            format!(
+                "the pixel values are {}x{}, the image {w}x{h}",
+                image.width, image.height
+            ),
+        ));
+    }
     let start = std::time::Instant::now();
     let n = layout.entries;
     let render_options = &options.render;
     let spp = render_options.spp.max(1);
-    let norm = options.normalization;
-    // The image of the same samples: what the differentiable normalisation subtracts.
-    let (image, mut stats) = match norm {
-        Normalization::Differentiable => render(scene, render_options),
-        Normalization::Fixed => (Image::new(w, h), RenderStats::default()),
-    };
-    let film = |scale: f32| AdjointFilm::new(adjoint, &image, norm, scale, n);
+    let mut stats = RenderStats::default();
+    let film = |scale: f32| AdjointFilm::new(adjoint, image, norm, scale, n);
     let mut invalid = 0;
     let mut interior_film = film(1.0 / spp as f32);
     let s = interior::pass::<Rev, _>(scene, 0, options, &mut interior_film);
@@ -227,8 +261,9 @@ pub fn adjoint_seed(seed: u64) -> u64 {
 }
 
 /// The loss of `scene`'s image against `target` and its gradient with respect to the parameters of
-/// `layout`: the loss pass renders with `options.render.seed`, the adjoint pass ([`render_gradient`])
-/// with [`adjoint_seed`] of it. Errors: a target of another size, and those of [`render_gradient`].
+/// `layout`: the loss pass renders with `options.render.seed`, the adjoint pass
+/// ([`render_gradient_with_image`], with the loss pass's image as the pixel values) with
+/// [`adjoint_seed`] of it. Errors: a target of another size, and those of [`render_gradient`].
 pub fn loss_gradient(
     scene: &Scene,
     layout: &GradientLayout,
@@ -246,7 +281,8 @@ pub fn loss_gradient(
         },
         ..options.clone()
     };
-    let mut gradient = render_gradient(scene, layout, &adjoint, &adjoint_options)?;
+    let mut gradient =
+        render_gradient_with_image(scene, layout, &adjoint, &image, &adjoint_options)?;
     gradient.stats.absorb(loss_stats);
     gradient.stats.seconds = start.elapsed().as_secs_f64();
     Ok(LossGradient {
