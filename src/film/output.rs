@@ -103,6 +103,35 @@ pub fn read_exr(path: &Path) -> crate::Result<(u32, u32, Channels)> {
     Ok((w as u32, h as u32, channels))
 }
 
+/// The image in the `R`, `G`, `B` channels of an EXR file (e.g. a target image). Errors: an unreadable
+/// file, a missing channel (the message lists the file's channels), a non-finite value.
+pub fn read_exr_rgb(path: &Path) -> crate::Result<super::Image> {
+    let (width, height, channels) = read_exr(path)?;
+    let mut image = super::Image::new(width, height);
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let Some((_, plane)) = channels.iter().find(|(n, _)| n == name) else {
+            let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(Error::file(
+                path,
+                format!("no channel {name} (channels: {})", names.join(", ")),
+            ));
+        };
+        if let Some(i) = plane.iter().position(|v| !v.is_finite()) {
+            return Err(Error::file(
+                path,
+                format!(
+                    "non-finite value {} in channel {name} at pixel {i}",
+                    plane[i]
+                ),
+            ));
+        }
+        for (px, v) in image.rgb.chunks_exact_mut(3).zip(plane) {
+            px[c] = *v;
+        }
+    }
+    Ok(image)
+}
+
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to `[0, 1]` (NaN maps to 0).
 #[inline]
 pub fn srgb_encode(linear: f32) -> f32 {

@@ -27,7 +27,7 @@
 //!     let params = ["ball.radius".to_string(), "light.center.x".to_string()];
 //!     scene.select_parameters(&params)?;
 //!     let d = integrator::render_derivatives(&scene, params.len(), &DiffOptions {
-//!         render: options,
+//!         render: options.clone(),
 //!         ..DiffOptions::default()
 //!     })?;
 //!     // d.image is `image`; d.total()[k] is d image / d params[k]; d.interior, d.primary and
@@ -35,6 +35,17 @@
 //!     let channels = d.channels(&params, true);
 //!     let out = std::env::temp_dir().join("d.exr");
 //!     film::write_exr(&out, image.width, image.height, &channels)?;
+//!
+//!     // A gradient (reverse mode): the loss of the image against a target and its gradient with
+//!     // respect to named parameters and whole grids (`GradientLayout::select(&mut scene, &params,
+//!     // &["blob".into()])`), all terms, at once. The entries follow the layout: named parameters
+//!     // first, then each grid's values.
+//!     let target = film::read_exr_rgb(&out)?;
+//!     let layout = integrator::GradientLayout::select(&mut scene, &params, &[])?;
+//!     let g = integrator::loss_gradient(&scene, &layout, &target, integrator::Loss::L2,
+//!                                       &DiffOptions { render: options, ..DiffOptions::default() })?;
+//!     println!("loss {} d loss / d ball.radius {}", g.loss, g.gradient.total()[0]);
+//!     // A new surface without reloading: `scene.set_grid_values("blob", values)?`, then render again.
 //!     Ok(())
 //! }
 //! ```
