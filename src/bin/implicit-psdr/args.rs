@@ -1,7 +1,7 @@
 //! The command line: subcommands, their arguments and help texts, and the parsers of argument values.
 
-use clap::{Args, Parser, Subcommand};
-use implicit_psdr::integrator::Normalization;
+use clap::{ArgGroup, Args, Parser, Subcommand};
+use implicit_psdr::integrator::{Loss, Normalization};
 use std::path::PathBuf;
 
 /// Physically based rendering of implicit surfaces.
@@ -52,7 +52,9 @@ pub(crate) enum Command {
     /// shape [nz, ny, nx].
     Bake(BakeArgs),
     /// List every differentiable parameter of a scene with its value, one `name value` per line
-    /// (angles in degrees, so derivatives with respect to them are per degree).
+    /// (angles in degrees, so derivatives with respect to them are per degree), and each grid node's
+    /// values once, after the node's `level`, as `NODE.values [nz, ny, nx] (N values; ...)` (the
+    /// names `grad --grid` and `diff --grid-direction` take: NODE, or NODE.values).
     Params {
         /// The scene file.
         scene: PathBuf,
@@ -61,6 +63,10 @@ pub(crate) enum Command {
     /// (`R`, `G`, `B`, and `d.P.R`, `d.P.G`, `d.P.B` per parameter P) and a PNG (the image beside one
     /// colour-mapped panel per derivative).
     Diff(DiffArgs),
+    /// The loss of the image against a target EXR and its gradient (reverse mode) with respect to
+    /// scene parameters and grid values, to a JSON file (the loss and one number per parameter) and one
+    /// float32 .npy per grid (the gradient of each value, shape [nz, ny, nx]).
+    Grad(GradArgs),
     /// Central finite differences of the image with respect to one parameter, with common random numbers
     /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
     Fd(FdArgs),
@@ -93,17 +99,9 @@ pub(crate) struct BakeArgs {
     pub(crate) out: PathBuf,
 }
 
+/// How a derivative is estimated besides the samples of the image, shared by `diff` and `grad`.
 #[derive(Args, Debug)]
-pub(crate) struct DiffArgs {
-    #[command(flatten)]
-    pub(crate) scene: SceneArgs,
-    /// A parameter to differentiate with respect to (repeat for several; see `params`).
-    #[arg(long = "param", value_name = "P", required = true)]
-    pub(crate) params: Vec<String>,
-    /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_primary.P.R|G|B`,
-    /// `d_secondary.P.R|G|B`; they sum to `d.P`).
-    #[arg(long)]
-    pub(crate) terms: bool,
+pub(crate) struct EstimatorArgs {
     /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it [default: spp/8,
     /// rounded up].
     #[arg(long)]
@@ -116,8 +114,59 @@ pub(crate) struct DiffArgs {
     /// (the filter-weight sum is a constant).
     #[arg(long, default_value = "differentiable")]
     pub(crate) normalization: Normalization,
+}
+
+#[derive(Args, Debug)]
+#[command(group(ArgGroup::new("selection").required(true).multiple(true)))]
+pub(crate) struct DiffArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// A parameter to differentiate with respect to (repeat for several; see `params`).
+    #[arg(long = "param", value_name = "P", group = "selection")]
+    pub(crate) params: Vec<String>,
+    /// Differentiate with respect to grid NODE's values along the direction U (a float32 .npy of the
+    /// grid's shape [nz, ny, nx]; repeatable): channels `d.NODE.values.R|G|B`, after the `--param`s.
+    #[arg(long = "grid-direction", value_name = "NODE=U.npy", value_parser = grid_direction,
+          group = "selection")]
+    pub(crate) grid_directions: Vec<(String, PathBuf)>,
+    /// Also write each term of the derivative (`d_interior.P.R|G|B`, `d_primary.P.R|G|B`,
+    /// `d_secondary.P.R|G|B`; they sum to `d.P`).
+    #[arg(long)]
+    pub(crate) terms: bool,
+    #[command(flatten)]
+    pub(crate) estimator: EstimatorArgs,
     #[command(flatten)]
     pub(crate) outputs: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+#[command(group(ArgGroup::new("selection").required(true).multiple(true)))]
+pub(crate) struct GradArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The target image: an EXR with channels R, G, B of the scene's image size.
+    #[arg(long, value_name = "T.exr")]
+    pub(crate) target: PathBuf,
+    /// The loss: `l2` (mean over pixels and R, G, B of (I − T)²) or `l1` (mean of |I − T|). The loss
+    /// is that of the image of `--seed`; its gradient is estimated with the samples of seed + 1 (so
+    /// that the two are independent).
+    #[arg(long, default_value = "l2")]
+    pub(crate) loss: Loss,
+    /// A parameter to differentiate with respect to (repeat for several; see `params`).
+    #[arg(long = "param", value_name = "P", group = "selection")]
+    pub(crate) params: Vec<String>,
+    /// Differentiate with respect to every value of grid node NODE (repeat for several; `params`
+    /// lists them as `NODE.values`).
+    #[arg(long = "grid", value_name = "NODE", group = "selection")]
+    pub(crate) grids: Vec<String>,
+    #[command(flatten)]
+    pub(crate) estimator: EstimatorArgs,
+    /// Output JSON file: `{"loss", "spp", "seed", "params": {P: dL/dP}, "grids": {NODE: FILE}}`. The
+    /// gradient of grid NODE goes beside it to FILE = `<stem>.NODE.values.npy` (float32, shape
+    /// [nz, ny, nx]), `<stem>` being this file's name without `.json`: `--out runs/a.json` writes
+    /// runs/a.NODE.values.npy, so runs with different names never share a grid file.
+    #[arg(long, value_name = "FILE.json", default_value = "grad.json")]
+    pub(crate) out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -140,6 +189,16 @@ pub(crate) fn assignment(text: &str) -> Result<(String, f32), String> {
     match value.trim().parse::<f32>() {
         Ok(v) if v.is_finite() => Ok((name.trim().to_string(), v)),
         _ => Err(format!("{value:?} is not a finite number")),
+    }
+}
+
+/// `NODE=FILE`.
+pub(crate) fn grid_direction(text: &str) -> Result<(String, PathBuf), String> {
+    match text.split_once('=') {
+        Some((node, file)) if !node.trim().is_empty() && !file.is_empty() => {
+            Ok((node.trim().to_string(), PathBuf::from(file)))
+        }
+        _ => Err("expected NODE=U.npy".into()),
     }
 }
 

@@ -2,12 +2,14 @@
 //!
 //! Every failure prints one line `error: ...` on stderr and exits with code 2 (as clap does for usage
 //! errors). Everything is validated before rendering, and outputs are written last (the PNG's failure
-//! removes the EXR), so a failed run leaves no partial output.
+//! removes the EXR; `grad` writes its JSON and `.npy` files to temporary names and renames them only
+//! when all are written), so a failed run leaves no partial output.
 
 mod args;
+mod grad;
 
 use anyhow::{Context, Result};
-use args::{BakeArgs, Cli, Command, DiffArgs, FdArgs, OutputArgs, SceneArgs};
+use args::{BakeArgs, Cli, Command, DiffArgs, EstimatorArgs, FdArgs, OutputArgs, SceneArgs};
 use clap::Parser;
 use implicit_psdr::film::{self, Image, colormap};
 use implicit_psdr::integrator::{
@@ -64,12 +66,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render { scene, outputs } => render(&scene, &outputs),
         Command::Bake(args) => bake(&args),
         Command::Params { scene } => {
-            for (name, value) in load_scene(&scene)?.parameters() {
-                println!("{name} {value}");
-            }
+            print!("{}", grad::parameter_list(&load_scene(&scene)?));
             Ok(())
         }
         Command::Diff(args) => diff(&args),
+        Command::Grad(args) => grad::grad(&args),
         Command::Fd(args) => finite_difference(&args),
         Command::Compare { a, b, channel } => {
             let rows = compare::compare_files(&a, &b, channel.as_deref())?;
@@ -105,6 +106,18 @@ fn prepare(args: &SceneArgs) -> Result<(scene::Scene, RenderOptions)> {
         progress: progress_bar(),
     };
     Ok((scene, options))
+}
+
+/// The derivative options of `diff` and `grad`: the image's samples and the estimator's settings.
+fn diff_options(render: RenderOptions, args: &EstimatorArgs) -> DiffOptions {
+    DiffOptions {
+        render,
+        normalization: args.normalization,
+        boundary: BoundaryBudget {
+            primary_spp: args.spp_primary,
+            secondary_spp: args.spp_secondary,
+        },
+    }
 }
 
 /// A progress bar on stderr when it is a terminal: one bar per stage of work.
@@ -211,20 +224,18 @@ fn diff(args: &DiffArgs) -> Result<()> {
     let (mut scene, render) = prepare(&args.scene)?;
     let file = in_file(&args.scene.scene);
     scene.select_parameters(&args.params).map_err(&file)?;
-    let options = DiffOptions {
-        render,
-        normalization: args.normalization,
-        boundary: BoundaryBudget {
-            primary_spp: args.spp_primary,
-            secondary_spp: args.spp_secondary,
-        },
-    };
-    let count = args.params.len();
+    // Grid directions take the slots after the named parameters, and their blocks' names.
+    let mut names = args.params.clone();
+    names.extend(
+        grad::select_directions(&mut scene, names.len(), &args.grid_directions).map_err(&file)?,
+    );
+    let options = diff_options(render, &args.estimator);
+    let count = names.len();
     let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;
     let image = &result.image;
     println!("note: {}", result.note(&scene.creased_shapes()));
-    let channels = result.channels(&args.params, args.terms);
-    write_derivatives(&paths, image, &channels, &args.params, &result.total())?;
+    let channels = result.channels(&names, args.terms);
+    write_derivatives(&paths, image, &channels, &names, &result.total())?;
     println!(
         "rendered {}x{} and {count} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
         image.width,
