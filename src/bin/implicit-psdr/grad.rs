@@ -5,6 +5,7 @@ use crate::args::GradArgs;
 use crate::{diff_options, in_file, prepare, warn};
 use anyhow::{Context, Result, bail};
 use implicit_psdr::film::{self, Image};
+use implicit_psdr::integrator::diff::terms_note;
 use implicit_psdr::integrator::{GradientLayout, loss_gradient};
 use implicit_psdr::scalar::GridValues;
 use implicit_psdr::scene::{GridBlock, Scene};
@@ -230,36 +231,6 @@ fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
     result
 }
 
-/// What the gradient holds, for the `note:` line (as `diff` prints for derivative images).
-fn gradient_note(primary: bool, secondary: bool, creased: &[(String, String)]) -> String {
-    if !primary && !secondary {
-        return "the gradient holds the interior term only (both boundary budgets are 0); the \
-                silhouette and shadow terms are missing, so it is wrong wherever edges move"
-            .into();
-    }
-    let mut held = vec!["interior".to_string()];
-    let mut skipped = Vec::new();
-    for (on, name) in [
-        (secondary, "secondary (shadow)"),
-        (primary, "primary (silhouette)"),
-    ] {
-        if on { &mut held } else { &mut skipped }.push(name.to_string());
-    }
-    let mut note = format!("the gradient holds the {} terms", join_and(&held));
-    if !skipped.is_empty() {
-        note += &format!("; skipped: {} (budget 0)", skipped.join(", "));
-    }
-    if !creased.is_empty() {
-        let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
-        note += &format!(
-            "; crease edges are not sampled, so where they move or hide what moves the gradient \
-             misses their boundary terms: {}",
-            list.join(", ")
-        );
-    }
-    note
-}
-
 pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     let out = &args.out;
     film::check_output_path(out, "--out", "json")?;
@@ -290,7 +261,12 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     let result = loss_gradient(&scene, &layout, &target, args.loss, &options).map_err(&file)?;
     let gradient = result.gradient.total();
     let (primary, secondary) = options.boundary.totals(&scene, options.render.spp);
-    let note = gradient_note(primary > 0, secondary > 0, &scene.creased_shapes());
+    let note = terms_note(
+        ("the gradient holds", "the gradient"),
+        primary > 0,
+        secondary > 0,
+        &scene.creased_shapes(),
+    );
     println!("note: {note}");
 
     let params: Vec<(String, f64)> = (layout.params.iter().cloned())

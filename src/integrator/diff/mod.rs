@@ -140,39 +140,54 @@ impl DerivativeImages {
     /// A one-line note for the user: which terms the derivative holds, and the shapes with crease
     /// edges (`(name, reason)`, [`Scene::creased_shapes`]) whose boundary terms are not sampled.
     pub fn note(&self, creased: &[(String, String)]) -> String {
-        if self.primary.is_empty() && self.secondary.is_empty() {
-            return "derivatives hold the interior term only (both boundary budgets are 0); the \
-                    silhouette and shadow terms are missing, so d.P is wrong where edges move"
-                .into();
-        }
-        let mut held = vec!["interior"];
-        let mut skipped = Vec::new();
-        for (term, name) in [
-            (&self.secondary, "secondary (shadow)"),
-            (&self.primary, "primary (silhouette)"),
-        ] {
-            if term.is_empty() {
-                skipped.push(name);
-            } else {
-                held.push(name);
-            }
-        }
-        let held = match held.as_slice() {
-            [rest @ .., last] if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
-            _ => held.join(""),
-        };
-        let mut note = format!("derivatives hold the {held} terms");
-        if !skipped.is_empty() {
-            note += &format!("; skipped: {} (budget 0)", skipped.join(", "));
-        }
-        if !creased.is_empty() {
-            let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
-            note += &format!(
-                "; crease edges are not sampled, so where they move or hide what moves d.P misses \
-                 their boundary terms: {}",
-                list.join(", ")
-            );
-        }
-        note
+        terms_note(
+            ("derivatives hold", "d.P"),
+            !self.primary.is_empty(),
+            !self.secondary.is_empty(),
+            creased,
+        )
     }
+}
+
+/// The one-line note of a derivative or gradient: which terms it holds (`primary`, `secondary`: whether
+/// those terms were computed) and the shapes with crease edges whose boundary terms are not sampled.
+/// `(holds, result)` words the subject: `("derivatives hold", "d.P")`, `("the gradient holds", "the
+/// gradient")`.
+pub fn terms_note(
+    (holds, result): (&str, &str),
+    primary: bool,
+    secondary: bool,
+    creased: &[(String, String)],
+) -> String {
+    if !primary && !secondary {
+        return format!(
+            "{holds} the interior term only (both boundary budgets are 0); the silhouette and \
+             shadow terms are missing, so {result} is wrong where edges move"
+        );
+    }
+    let mut held = vec!["interior"];
+    let mut skipped = Vec::new();
+    for (on, name) in [
+        (secondary, "secondary (shadow)"),
+        (primary, "primary (silhouette)"),
+    ] {
+        if on { &mut held } else { &mut skipped }.push(name);
+    }
+    let held = match held.as_slice() {
+        [rest @ .., last] if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => held.join(""),
+    };
+    let mut note = format!("{holds} the {held} terms");
+    if !skipped.is_empty() {
+        note += &format!("; skipped: {} (budget 0)", skipped.join(", "));
+    }
+    if !creased.is_empty() {
+        let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
+        note += &format!(
+            "; crease edges are not sampled, so where they move or hide what moves {result} misses \
+             their boundary terms: {}",
+            list.join(", ")
+        );
+    }
+    note
 }
