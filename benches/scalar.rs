@@ -61,7 +61,7 @@ impl Scalar for NumDual8 {
     #[inline(always)]
     fn lift(value: f32, slot: Slot) -> Self {
         match slot {
-            Some(k) if k < 8 => Self(DualSVec32::from_re(value).derivative(usize::from(k))),
+            Some(k) if k < 8 => Self(DualSVec32::from_re(value).derivative(k as usize)),
             _ => Self::constant(value),
         }
     }

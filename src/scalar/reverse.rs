@@ -457,11 +457,10 @@ impl Scalar for Rev {
                         d[2][c] += wy[b] * along_x;
                     }
                 }
-                for axis in 0..3 {
-                    for k in 0..4 {
-                        let w = taps.weight[axis][k];
+                for (weights, partials) in taps.weight.iter().zip(&d) {
+                    for (w, &p) in weights.iter().zip(partials) {
                         if w.i != CONSTANT {
-                            t.operand(w.i, d[axis][k]);
+                            t.operand(w.i, p);
                         }
                     }
                 }
