@@ -11,9 +11,19 @@
 //! what `Dual32` seeded in that input gives; the quotient rule; finite derivatives at the guarded points
 //! (`safe_sqrt` at 0, `acos` at ±1, `atan2` at the origin); and `Grad` on an SDF, on and off its surface,
 //! against num-dual's spatial gradient.
+//!
+//! The reverse-mode [`Rev`] (and `Grad<Rev>`) joins the suite: a direction `k` is gradient entry `k`
+//! (`Rev::parameter(x, k)`), and it is read back by sweeping the tape from the value
+//! ([`Recording::sweep`]), so every check runs inside a [`Recording`] ([`Directions::recorded`]). Its own
+//! tests: the eight-input expression swept once against `DualN<8>` slot by slot; a recording refuses to
+//! start inside another on the same thread; and the grid's B-spline sum ([`Scalar::lattice_sum`]), one
+//! node over 64 values, gives each value the product of its weights and agrees with forward mode along
+//! a direction of the values, directly and through a grid SDF (value and spatial gradient).
 
 use implicit_psdr::scalar::interval::{Interval, IntervalGrad};
-use implicit_psdr::scalar::{Dual2Vec3, Dual32, DualN, DualVec3, Grad, Scalar, Slot};
+use implicit_psdr::scalar::{
+    Dual2Vec3, Dual32, DualN, DualVec3, Grad, Recording, Rev, Scalar, Slot,
+};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// Reference scalar: plain `f64`, used for central differences with a step far below `f32` resolution.
@@ -103,9 +113,14 @@ trait Directions: Scalar {
     const DIRS: usize;
     /// The derivative in direction `k`.
     fn d(self, k: usize) -> f32;
-    /// `x` seeded in direction `k` (a constant for `k >= DIRS`).
+    /// `x` seeded in direction `k` (a constant for `k >= DIRS`, or a direction that is not read).
     fn seed(x: f32, k: usize) -> Self {
         Self::lift(x, Some(k as u32))
+    }
+    /// Runs `f`, in which values are computed and their directions read, with what the type needs to
+    /// record them (a tape for reverse mode; nothing for forward mode).
+    fn recorded<R>(f: impl FnOnce() -> R) -> R {
+        f()
     }
 }
 
@@ -153,6 +168,26 @@ impl<const N: usize> Directions for DualN<N> {
     }
 }
 
+/// Direction `k` is gradient entry `k`, read by sweeping the tape backwards from the value (the tape
+/// of the [`Recording`] that [`Directions::recorded`] holds; entries reported several times are summed).
+/// Seeds past `DIRS` are parameters whose entries are not read, so they look constant.
+impl Directions for Rev {
+    const DIRS: usize = 3;
+    fn d(self, k: usize) -> f32 {
+        let mut sum = 0.0;
+        Recording::sweep(self, |entry, d| {
+            if entry as usize == k {
+                sum += d;
+            }
+        });
+        sum
+    }
+    fn recorded<R>(f: impl FnOnce() -> R) -> R {
+        let _tape = Recording::start();
+        f()
+    }
+}
+
 /// Direction 0 is the spatial one (`g[0]`, seeded as `Grad::seed` seeds an axis); directions `1..` are
 /// those of `S`, carried by the value (scene parameters are constants in space).
 impl<S: Directions> Directions for Grad<S> {
@@ -177,6 +212,9 @@ impl<S: Directions> Directions for Grad<S> {
                 g: [z; 3],
             }
         }
+    }
+    fn recorded<R>(f: impl FnOnce() -> R) -> R {
+        S::recorded(f)
     }
 }
 
@@ -239,43 +277,48 @@ fn reference_derivatives(x: f32) -> Vec<f64> {
 /// Checks one type: primal agreement with `f32` (`exact` for bitwise) and derivatives in every direction.
 fn check_type<S: Directions>(exact: bool) {
     for &x in &SPICY {
-        let reference = exprs(x);
-        let fd = reference_derivatives(x);
-        // Every direction, plus one slot past the last (which must give a constant).
-        for k in 0..=S::DIRS {
-            let values = exprs(S::seed(x, k));
-            for (i, (v, &r)) in values.iter().zip(&reference).enumerate() {
-                let p = v.primal();
-                if exact {
-                    assert_eq!(p.to_bits(), r.to_bits(), "expr {i} at x = {x}: {p} vs {r}");
-                } else {
-                    assert!(
-                        close(p as f64, r as f64, 1e-4),
-                        "expr {i} at x = {x}: {p} vs {r}"
-                    );
-                }
-                for j in 0..S::DIRS {
-                    let d = v.d(j) as f64;
-                    let want = if j == k { fd[i] } else { 0.0 };
-                    assert!(
-                        close(d, want, 1e-3),
-                        "expr {i} at x = {x}, seeded {k}, direction {j}: {d} vs {want}"
-                    );
-                }
+        S::recorded(|| check_at::<S>(x, exact));
+    }
+}
+
+/// [`check_type`] at one input `x`.
+fn check_at<S: Directions>(x: f32, exact: bool) {
+    let reference = exprs(x);
+    let fd = reference_derivatives(x);
+    // Every direction, plus one slot past the last (which must give a constant).
+    for k in 0..=S::DIRS {
+        let values = exprs(S::seed(x, k));
+        for (i, (v, &r)) in values.iter().zip(&reference).enumerate() {
+            let p = v.primal();
+            if exact {
+                assert_eq!(p.to_bits(), r.to_bits(), "expr {i} at x = {x}: {p} vs {r}");
+            } else {
+                assert!(
+                    close(p as f64, r as f64, 1e-4),
+                    "expr {i} at x = {x}: {p} vs {r}"
+                );
             }
-        }
-        // `detach` drops the derivative of its factor: d(detach(x) · x) = x.
-        let v = S::seed(x, 0).detach() * S::seed(x, 0);
-        assert_eq!(v.primal(), x * x);
-        if S::DIRS > 0 {
-            assert_eq!(v.d(0), x);
-        }
-        // Unseeded lifts are constants.
-        let c = exprs(S::lift(x, None));
-        for v in c {
             for j in 0..S::DIRS {
-                assert_eq!(v.d(j), 0.0);
+                let d = v.d(j) as f64;
+                let want = if j == k { fd[i] } else { 0.0 };
+                assert!(
+                    close(d, want, 1e-3),
+                    "expr {i} at x = {x}, seeded {k}, direction {j}: {d} vs {want}"
+                );
             }
+        }
+    }
+    // `detach` drops the derivative of its factor: d(detach(x) · x) = x.
+    let v = S::seed(x, 0).detach() * S::seed(x, 0);
+    assert_eq!(v.primal(), x * x);
+    if S::DIRS > 0 {
+        assert_eq!(v.d(0), x);
+    }
+    // Unseeded lifts are constants.
+    let c = exprs(S::lift(x, None));
+    for v in c {
+        for j in 0..S::DIRS {
+            assert_eq!(v.d(j), 0.0);
         }
     }
 }
@@ -413,6 +456,8 @@ scalar_suite!(dual_n8_conforms, DualN<8>, exact = true);
 scalar_suite!(grad_f32_conforms, Grad<f32>, exact = true);
 scalar_suite!(grad_dual_n2_conforms, Grad<DualN<2>>, exact = true);
 scalar_suite!(grad_dual32_conforms, Grad<Dual32>, exact = false);
+scalar_suite!(rev_conforms, Rev, exact = true);
+scalar_suite!(grad_rev_conforms, Grad<Rev>, exact = true);
 scalar_suite!(interval_encloses, Interval, enclosure);
 scalar_suite!(interval_grad_encloses, IntervalGrad, enclosure);
 
@@ -421,6 +466,11 @@ scalar_suite!(interval_grad_encloses, IntervalGrad, enclosure);
 /// attached normals read (`∂π∇φ`); a rule whose local derivative were computed from primal values only
 /// would give 0 here.
 fn check_mixed_partials<S: Directions>() {
+    S::recorded(mixed_partials_at_spicy_points::<S>);
+}
+
+/// [`check_mixed_partials`]'s body (inside a recording for reverse mode).
+fn mixed_partials_at_spicy_points<S: Directions>() {
     for &x in &SPICY {
         // A step growing like √|x|: the oscillating entries need a short step at large |x|, the
         // polynomial ones a step long enough that rounding of their large values stays small.
@@ -453,6 +503,7 @@ fn check_mixed_partials<S: Directions>() {
 fn grad_mixed_partials_match_second_differences() {
     check_mixed_partials::<DualN<1>>();
     check_mixed_partials::<Dual32>();
+    check_mixed_partials::<Rev>();
 }
 
 /// A shading-like function of eight inputs: a normal from three, a light direction from three, an albedo
@@ -579,6 +630,9 @@ fn quotient_rule() {
 #[test]
 fn guarded_points_have_finite_derivatives() {
     fn check<S: Directions>() {
+        S::recorded(guarded::<S>);
+    }
+    fn guarded<S: Directions>() {
         let z = S::lift(0.0, Some(0)).safe_sqrt();
         assert_eq!((z.primal(), z.d(0)), (0.0, 0.0));
         let n = S::lift(-1e-3, Some(0)).safe_sqrt();
@@ -593,6 +647,7 @@ fn guarded_points_have_finite_derivatives() {
     check::<Dual32>();
     check::<DualN<1>>();
     check::<DualN<8>>();
+    check::<Rev>();
     // DualN also guards atan2 at the origin (num-dual returns NaN there).
     let o = DualN::<2>::lift(0.0, Some(0)).atan2(DualN::<2>::lift(0.0, Some(1)));
     assert_eq!(o.re, 0.0);
@@ -656,6 +711,323 @@ fn grad_on_an_sdf_matches_the_spatial_dual() {
                 close(r.g[i].eps[0] as f64, fd, 5e-3),
                 "at {p}: ∂π∇φ_{i} {} vs {fd}",
                 r.g[i].eps[0]
+            );
+        }
+    }
+}
+
+/// One sweep of the eight-input expression gives all eight partials: slot by slot what `DualN<8>` gives
+/// (rounding apart: the adjoints are summed in another order; 1e-5 is ~100 f32 ulps, the expression has
+/// about 40 operations), with the primal bit for bit. A parameter at the largest entry is reported as
+/// that entry.
+#[test]
+fn rev_sweep_matches_dual_n8_slot_by_slot() {
+    for p in POINTS {
+        let forward = eight(std::array::from_fn(|i| {
+            DualN::<8>::lift(p[i], Some(i as u32))
+        }));
+        let _tape = Recording::start();
+        let value = eight(std::array::from_fn(|i| Rev::lift(p[i], Some(i as u32))));
+        assert_eq!(value.primal().to_bits(), forward.re.to_bits(), "at {p:?}");
+        let mut grad = [0.0f32; 8];
+        Recording::sweep(value, |entry, d| grad[entry as usize] += d);
+        for k in 0..8 {
+            assert!(
+                close(grad[k] as f64, forward.eps[k] as f64, 1e-5),
+                "input {k} at {p:?}: reverse {} vs forward {}",
+                grad[k],
+                forward.eps[k]
+            );
+        }
+    }
+    let _tape = Recording::start();
+    let last = implicit_psdr::scalar::MAX_GRADIENT_ENTRY;
+    let y = Rev::parameter(3.0, last) * Rev::parameter(2.0, 0);
+    let mut seen = Vec::new();
+    Recording::sweep(y, |entry, d| seen.push((entry, d)));
+    seen.sort_by_key(|&(e, _)| e);
+    assert_eq!(seen, vec![(0, 3.0), (last, 2.0)]);
+}
+
+/// A recording refuses to start while another is active on the same thread (their tapes would
+/// interleave), and the refusal leaves the active one intact; other threads have their own tapes; once
+/// the guard is dropped a new recording may start.
+#[test]
+fn recording_refuses_to_start_inside_another() {
+    assert!(!Recording::is_active());
+    {
+        let _outer = Recording::start();
+        assert!(Recording::is_active());
+        let x = Rev::parameter(1.5, 0);
+        let y = x * x + x.sin();
+        let nested = std::panic::catch_unwind(Recording::start);
+        let message = nested.err().expect("a nested recording must panic");
+        let message = message
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| message.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        assert!(message.contains("already active"), "{message:?}");
+        // The outer tape survived: d(x² + sin x) = 2x + cos x.
+        let mut d = 0.0;
+        Recording::sweep(y, |_, v| d += v);
+        assert!(close(d as f64, 3.0 + 1.5f64.cos(), 1e-6), "{d}");
+        // Another thread records on its own tape meanwhile.
+        let other = std::thread::spawn(|| {
+            let _tape = Recording::start();
+            let z = Rev::parameter(2.0, 4).exp();
+            let mut d = 0.0;
+            Recording::sweep(z, |_, v| d += v);
+            d
+        })
+        .join()
+        .unwrap();
+        assert!(close(other as f64, 2.0f64.exp(), 1e-6));
+        assert!(Recording::is_active());
+    }
+    assert!(!Recording::is_active());
+    let _again = Recording::start();
+}
+
+/// The same refusal as a `should_panic` test: the message names the cause.
+#[test]
+#[should_panic(expected = "already active on this thread")]
+fn nested_recording_panics() {
+    let _outer = Recording::start();
+    let _inner = Recording::start();
+}
+
+/// A 5×4×6 lattice of values (x fastest) with distinct, irregular magnitudes.
+fn lattice_values(dims: [usize; 3]) -> Vec<f32> {
+    (0..dims.iter().product::<usize>())
+        .map(|i| ((i as f32 * 0.37).sin() * 1.7 + (i % 7) as f32 * 0.11) - 0.4)
+        .collect()
+}
+
+/// A direction of the values, in `[-1, 1]`.
+fn lattice_direction(n: usize) -> Vec<f32> {
+    (0..n).map(|i| (i as f32 * 1.913 + 0.3).cos()).collect()
+}
+
+/// `Rev::lattice_sum` with a block, directly on taps: the primal is the nested `f32` sum bit for bit;
+/// each value `i` gets the entry `first + i` with the product of its three weights (summed where the
+/// ghost layer repeats an index); no entry outside the block; and each non-constant weight gets the
+/// sum with that weight's axis replaced by the unit vector, as `DualN` seeded in that weight gives.
+/// Along a direction `u` of the values the gradient gives `lattice_sum_nested(taps, u)`, the term
+/// forward mode adds (`GridValues::Direction`).
+///
+/// Tolerances: a product of three weights in `[0, 1]` is rounded twice in `f32` (≤ 2.4e-7 relative);
+/// the weight partials and the directional sums add 16 or 64 such products of values ≤ 2.5 in
+/// different orders (≤ 64 · 2.5 · 2 ulp ≈ 4e-5 absolute): bounds 1e-6 and 1e-4.
+#[test]
+fn rev_lattice_sum_gives_each_value_its_weight_product() {
+    use implicit_psdr::scalar::{LatticeTaps, lattice_sum_nested};
+    let dims = [5usize, 4, 6];
+    let [nx, ny, nz] = dims;
+    let values = lattice_values(dims);
+    let u = lattice_direction(values.len());
+    // Interior taps on x and z, the high ghost fold on y (index 3 twice, extra weight 0).
+    let f32_taps = LatticeTaps {
+        index: [[0, 1, 2, 3], [1, 2, 3, 3], [2, 3, 4, 5]],
+        weight: [
+            [0.02, 0.48, 0.45, 0.05],
+            [0.1, 0.3, 0.6, 0.0],
+            [0.17, 0.66, 0.16, 0.01],
+        ],
+    };
+    let first = 12u32;
+    for moving in [false, true] {
+        let _tape = Recording::start();
+        // Moving weights are parameters 0..12 (axis-major), as a point's coordinates make them.
+        let taps = LatticeTaps {
+            index: f32_taps.index,
+            weight: std::array::from_fn(|a| {
+                std::array::from_fn(|k| {
+                    let w = f32_taps.weight[a][k];
+                    if moving {
+                        Rev::parameter(w, (4 * a + k) as u32)
+                    } else {
+                        Rev::constant(w)
+                    }
+                })
+            }),
+        };
+        let v = Rev::lattice_sum(&taps, &values, dims, Some(first));
+        let want = lattice_sum_nested::<f32>(&f32_taps, &values, nx, ny);
+        assert_eq!(v.primal().to_bits(), want.to_bits());
+        let mut grad = vec![0.0f64; first as usize + values.len()];
+        Recording::sweep(v, |entry, d| grad[entry as usize] += d as f64);
+        // Each value: the product of its weights.
+        let mut product = vec![0.0f64; values.len()];
+        let [ix, iy, iz] = f32_taps.index;
+        let [wx, wy, wz] = f32_taps.weight;
+        for c in 0..4 {
+            for b in 0..4 {
+                for a in 0..4 {
+                    product[(iz[c] * ny + iy[b]) * nx + ix[a]] +=
+                        wx[a] as f64 * wy[b] as f64 * wz[c] as f64;
+                }
+            }
+        }
+        assert!(iz.iter().all(|&z| z < nz));
+        for (i, p) in product.iter().enumerate() {
+            let got = grad[first as usize + i];
+            assert!(
+                (got - p).abs() <= 1e-6,
+                "moving {moving}, value {i}: {got} vs {p}"
+            );
+        }
+        // Along u, as forward mode's direction term.
+        let along: f64 = (0..values.len())
+            .map(|i| grad[first as usize + i] * u[i] as f64)
+            .sum();
+        let forward = lattice_sum_nested::<f32>(&f32_taps, &u, nx, ny) as f64;
+        assert!(
+            (along - forward).abs() <= 1e-4,
+            "moving {moving}: {along} vs {forward}"
+        );
+        // The weights: nothing when constant; otherwise what DualN seeded in that weight gives.
+        for a in 0..3 {
+            for k in 0..4 {
+                let got = grad[4 * a + k];
+                let want = if moving {
+                    let mut seeded = f32_taps.map(|_, w| DualN::<1>::constant(w));
+                    seeded.weight[a][k] = DualN::<1>::lift(f32_taps.weight[a][k], Some(0));
+                    lattice_sum_nested(&seeded, &values, nx, ny).eps[0] as f64
+                } else {
+                    0.0
+                };
+                assert!(
+                    (got - want).abs() <= 1e-4,
+                    "moving {moving}, weight {a}/{k}: {got} vs {want}"
+                );
+            }
+        }
+    }
+}
+
+/// `grid` (a grid node) with its values differentiated as `selection`.
+fn select_values(
+    mut grid: implicit_psdr::sdf::Sdf,
+    selection: implicit_psdr::scalar::GridValues,
+) -> implicit_psdr::sdf::Sdf {
+    match &mut grid {
+        implicit_psdr::sdf::Sdf::Grid { selection: s, .. } => *s = selection,
+        _ => panic!("not a grid"),
+    }
+    grid
+}
+
+/// Through a whole grid SDF (a sphere baked at 8³): `Rev` with the values as a block (entries `3..`)
+/// and the point as entries 0–2 against `DualN<4>` with the point in slots 0–2 and the values along `u`
+/// in slot 3 (`GridValues::Direction`), in the interior, in the first and last cells (the ghost folds),
+/// on a lattice node and outside the box (clamped); the values' partials sum to 1 (the B-spline's
+/// partition of unity: `Σ ∂φ/∂c_i = −∂φ/∂level`). And `Grad<Rev>` against `Grad<DualN<1>>` along `u`:
+/// the value and the three spatial partials (the mixed partials `∂c∇φ` that attached normals read).
+///
+/// Tolerances: both sides are `f32` sums of the same ~64 products in different orders; 1e-5 relative
+/// to the sum of their magnitudes `Σ |u_i ∂φ/∂c_i|` (≥ 0.1 here) is ~100 ulps.
+#[test]
+fn rev_grid_sdf_matches_forward_direction() {
+    use implicit_psdr::Vec3;
+    use implicit_psdr::scalar::GridValues;
+    use implicit_psdr::sdf::{Sdf, bake};
+    use std::sync::Arc;
+    let (lo, hi) = (glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0));
+    let data = bake(
+        &Sdf::sphere(glam::Vec3::new(0.05, -0.1, 0.02), 0.6),
+        lo,
+        hi,
+        8,
+    );
+    let n = data.values.len();
+    let grid = Sdf::grid(data, lo, hi).unwrap();
+    let u = Arc::new(lattice_direction(n));
+    let reverse = select_values(grid.clone(), GridValues::Gradient { first: 3 });
+    let forward = select_values(
+        grid.clone(),
+        GridValues::Direction {
+            slot: 3,
+            u: u.clone(),
+        },
+    );
+    let spatial = select_values(
+        grid.clone(),
+        GridValues::Direction {
+            slot: 0,
+            u: u.clone(),
+        },
+    );
+    let step = 2.0 / 7.0;
+    for p in [
+        glam::Vec3::new(0.1, 0.2, -0.3),
+        glam::Vec3::new(-0.95, 0.1, 0.05),
+        glam::Vec3::new(0.9, -0.9, 0.8),
+        glam::Vec3::new(-1.0 + 3.0 * step, -1.0 + 2.0 * step, -1.0 + 5.0 * step),
+        glam::Vec3::new(1.3, 0.2, -0.1),
+    ] {
+        let _tape = Recording::start();
+        let v = reverse.eval(Vec3::new(
+            Rev::parameter(p.x, 0),
+            Rev::parameter(p.y, 1),
+            Rev::parameter(p.z, 2),
+        ));
+        let f = forward.eval(Vec3::new(
+            DualN::<4>::lift(p.x, Some(0)),
+            DualN::<4>::lift(p.y, Some(1)),
+            DualN::<4>::lift(p.z, Some(2)),
+        ));
+        assert_eq!(v.primal().to_bits(), grid.eval_f32(p).to_bits(), "at {p}");
+        assert_eq!(f.re.to_bits(), grid.eval_f32(p).to_bits(), "at {p}");
+        let mut grad = vec![0.0f64; 3 + n];
+        Recording::sweep(v, |entry, d| grad[entry as usize] += d as f64);
+        for k in 0..3 {
+            assert!(
+                close(grad[k], f.eps[k] as f64, 1e-5),
+                "at {p}: ∂φ/∂p_{k} reverse {} vs forward {}",
+                grad[k],
+                f.eps[k]
+            );
+        }
+        let values = &grad[3..];
+        let along: f64 = values
+            .iter()
+            .zip(u.iter())
+            .map(|(g, u)| g * *u as f64)
+            .sum();
+        let scale: f64 = values
+            .iter()
+            .zip(u.iter())
+            .map(|(g, u)| (g * *u as f64).abs())
+            .sum();
+        assert!(scale > 0.1, "at {p}: {scale}");
+        assert!(
+            (along - f.eps[3] as f64).abs() <= 1e-5 * scale,
+            "at {p}: along u reverse {along} vs forward {}",
+            f.eps[3]
+        );
+        let unity: f64 = values.iter().sum();
+        assert!((unity - 1.0).abs() <= 1e-5, "at {p}: Σ ∂φ/∂c = {unity}");
+        // Grad<Rev>: value and spatial gradient, each swept along u.
+        let gr = reverse.eval::<Grad<Rev>>(Grad::seed(p));
+        let gf = spatial.eval::<Grad<DualN<1>>>(Grad::seed(p));
+        for (what, r, f) in [
+            ("φ", gr.v, gf.v),
+            ("∂xφ", gr.g[0], gf.g[0]),
+            ("∂yφ", gr.g[1], gf.g[1]),
+            ("∂zφ", gr.g[2], gf.g[2]),
+        ] {
+            assert_eq!(r.primal().to_bits(), f.re.to_bits(), "{what} at {p}");
+            let (mut along, mut scale) = (0.0f64, 0.0f64);
+            Recording::sweep(r, |entry, d| {
+                let term = d as f64 * u[entry as usize - 3] as f64;
+                along += term;
+                scale += term.abs();
+            });
+            assert!(
+                (along - f.eps[0] as f64).abs() <= 1e-5 * scale.max(0.1),
+                "{what} at {p}: along u reverse {along} vs forward {}",
+                f.eps[0]
             );
         }
     }
