@@ -102,7 +102,10 @@ fn main() {
     };
     // A target that differs where the shapes are: the ball a little larger.
     let target_scene = scene.with_parameter("ball.radius", 0.65).unwrap();
-    let (target, _) = render(&target_scene, &options(99, BoundaryBudget::default()).render);
+    let (target, _) = render(
+        &target_scene,
+        &options(99, BoundaryBudget::default()).render,
+    );
     println!(
         "grid scene {}x{}, {spp} spp, {} gradient entries ({} named + {} grid values)",
         scene.camera.width,
@@ -116,7 +119,10 @@ fn main() {
     for rep in 0..reps {
         let seed = rep as u64;
         let t = Instant::now();
-        black_box(render(&scene, &options(seed, BoundaryBudget::default()).render));
+        black_box(render(
+            &scene,
+            &options(seed, BoundaryBudget::default()).render,
+        ));
         primal.push(t.elapsed().as_secs_f64());
         peak_primal = peak_mib();
         let t = Instant::now();

@@ -466,7 +466,7 @@ fn smooth_direction(shape: [usize; 3], seed: u64) -> Vec<f32> {
     let waves: Vec<([f32; 3], f32, f32)> = (0..4)
         .map(|_| {
             let k = [rng.f32(), rng.f32(), rng.f32()].map(|v| (v * 2.0 - 1.0) * 6.0);
-            (k, rng.f32() * 6.283, rng.f32() * 2.0 - 1.0)
+            (k, rng.f32() * std::f32::consts::TAU, rng.f32() * 2.0 - 1.0)
         })
         .collect();
     let mut u = Vec::with_capacity(nx * ny * nz);

@@ -731,12 +731,10 @@ fn rev_sweep_matches_dual_n8_slot_by_slot() {
         assert_eq!(value.primal().to_bits(), forward.re.to_bits(), "at {p:?}");
         let mut grad = [0.0f32; 8];
         Recording::sweep(value, |entry, d| grad[entry as usize] += d);
-        for k in 0..8 {
+        for (k, (r, f)) in grad.iter().zip(forward.eps).enumerate() {
             assert!(
-                close(grad[k] as f64, forward.eps[k] as f64, 1e-5),
-                "input {k} at {p:?}: reverse {} vs forward {}",
-                grad[k],
-                forward.eps[k]
+                close(*r as f64, f as f64, 1e-5),
+                "input {k} at {p:?}: reverse {r} vs forward {f}"
             );
         }
     }
@@ -981,12 +979,10 @@ fn rev_grid_sdf_matches_forward_direction() {
         assert_eq!(f.re.to_bits(), grid.eval_f32(p).to_bits(), "at {p}");
         let mut grad = vec![0.0f64; 3 + n];
         Recording::sweep(v, |entry, d| grad[entry as usize] += d as f64);
-        for k in 0..3 {
+        for (k, (r, fk)) in grad.iter().zip(&f.eps[..3]).enumerate() {
             assert!(
-                close(grad[k], f.eps[k] as f64, 1e-5),
-                "at {p}: ∂φ/∂p_{k} reverse {} vs forward {}",
-                grad[k],
-                f.eps[k]
+                close(*r, *fk as f64, 1e-5),
+                "at {p}: ∂φ/∂p_{k} reverse {r} vs forward {fk}"
             );
         }
         let values = &grad[3..];
