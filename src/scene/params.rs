@@ -248,8 +248,8 @@ impl Scene {
     ///   `major_radius`, `minor_radius`; cylinder `center`, `radius`, `half_height`, `rounding`; capsule `a`,
     ///   `b`, `radius`; plane `offset`; smooth union `k`; transform `translate`, `angle` (degrees, present
     ///   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
-    ///   intersection and difference have no fields. Grid samples are not parameters (a grid moves with its
-    ///   shape's `translate` or an enclosing transform).
+    ///   intersection and difference have no fields; a grid has `level`. A grid's samples are not listed
+    ///   here one by one: they are one block `<prefix>.values` ([`Scene::grid_blocks`]).
     /// - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
     ///   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
     ///   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`
@@ -259,7 +259,7 @@ impl Scene {
     /// a transform's rotation `axis`) are not parameters: they are normalised on input, so a change of one
     /// component is not a change of the surface along that component alone (its derivative would need the
     /// normalisation's projection, and a finite difference would leave the unit sphere). The grid's box is not
-    /// one either (the samples are data). Image size, filter, spp and integrator settings are not numbers
+    /// one either (its samples are, as a block). Image size, filter, spp and integrator settings are not numbers
     /// of the scene's geometry or light.
     ///
     /// ## Order
