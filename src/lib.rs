@@ -18,6 +18,7 @@ pub mod error;
 pub mod film;
 pub mod integrator;
 pub mod math;
+pub mod optimize;
 pub mod sampler;
 pub mod scalar;
 pub mod scene;

@@ -39,12 +39,12 @@ macro_rules! grid_walk {
         fn $walk(
             sdf: &$($m)? Sdf,
             prefix: &str,
-            f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? GridValues),
+            f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? GridValues, [glam::Vec3; 2]),
         ) {
             match sdf {
                 Sdf::Grid {
-                    data, selection, ..
-                } => f(prefix, data, selection),
+                    data, selection, bbox_min, bbox_max, ..
+                } => f(prefix, data, selection, [*bbox_min, *bbox_max]),
                 Sdf::Union(children)
                 | Sdf::Intersection(children)
                 | Sdf::Difference(children)
@@ -72,13 +72,13 @@ impl Sdf {
     /// Whether some grid in the tree has its values selected for differentiation.
     pub fn grid_values_selected(&self) -> bool {
         let mut any = false;
-        walk(self, "", &mut |_, _, s| any |= *s != GridValues::Constant);
+        walk(self, "", &mut |_, _, s, _| any |= *s != GridValues::Constant);
         any
     }
 
     /// Calls `f` with every grid node's selection (to renumber or clear it).
     pub fn visit_grid_selections_mut(&mut self, f: &mut dyn FnMut(&mut GridValues)) {
-        walk_mut(self, "", &mut |_, _, s| f(s));
+        walk_mut(self, "", &mut |_, _, s, _| f(s));
     }
 }
 
@@ -90,7 +90,7 @@ impl Scene {
             walk(
                 &shape.sdf,
                 &root_prefix(&shape.name, &shape.sdf),
-                &mut |node, data, _| {
+                &mut |node, data, _, _| {
                     let [nx, ny, nz] = data.dims;
                     out.push(GridBlock {
                         node: node.to_string(),
@@ -103,21 +103,40 @@ impl Scene {
         out
     }
 
-    /// The values of grid node `node`. Errors: no grid node of that name (the message lists them).
-    pub fn grid_values(&self, node: &str) -> Result<Arc<GridData>> {
+    /// Grid node `node`'s values and box.
+    fn grid(&self, node: &str) -> Result<(Arc<GridData>, [glam::Vec3; 2])> {
         let mut found = None;
         for shape in &self.shapes {
             walk(
                 &shape.sdf,
                 &root_prefix(&shape.name, &shape.sdf),
-                &mut |n, data, _| {
+                &mut |n, data, _, bbox| {
                     if n == node {
-                        found = Some(data.clone());
+                        found = Some((data.clone(), bbox));
                     }
                 },
             );
         }
         found.ok_or_else(|| self.unknown_grid(node))
+    }
+
+    /// The values of grid node `node`. Errors: no grid node of that name (the message lists them).
+    pub fn grid_values(&self, node: &str) -> Result<Arc<GridData>> {
+        Ok(self.grid(node)?.0)
+    }
+
+    /// The length of grid node `node`'s box diagonal, in the node's own units (a bound for its values
+    /// when they are distances).
+    pub fn grid_diagonal(&self, node: &str) -> Result<f32> {
+        let [lo, hi] = self.grid(node)?.1;
+        Ok((hi - lo).length())
+    }
+
+    /// The scene seen through `camera` (derived data recomputed).
+    pub fn with_camera(&self, camera: crate::camera::Camera) -> Scene {
+        let mut scene = self.clone();
+        scene.camera = camera;
+        scene.refreshed()
     }
 
     /// Replaces the values of grid node `node` (same layout: `values[(z · ny + y) · nx + x]`, as many
@@ -129,7 +148,7 @@ impl Scene {
         let data = Arc::new(data);
         for shape in &mut self.shapes {
             let prefix = root_prefix(&shape.name, &shape.sdf);
-            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, _| {
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, _, _| {
                 if n == node {
                     *d = data.clone();
                 }
@@ -170,7 +189,7 @@ impl Scene {
         }
         for shape in &mut self.shapes {
             let prefix = root_prefix(&shape.name, &shape.sdf);
-            walk_mut(&mut shape.sdf, &prefix, &mut |n, _, s| {
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, _, s, _| {
                 *s = selection
                     .iter()
                     .find(|(node, _)| node == n)

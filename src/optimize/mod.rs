@@ -1,0 +1,301 @@
+//! Inverse rendering: optimise named parameters and whole grids so that renders from several views
+//! match target images, with the reverse-mode gradient ([`crate::integrator::loss_gradient`]) and Adam.
+//!
+//! One iteration: a subset of the views (all by default; otherwise drawn from the seed), for each view
+//! the loss pass and the adjoint pass at the view's camera, the mean loss and the mean gradient over
+//! those views, one Adam step per parameter (grid values and named parameters with their own learning
+//! rates), then every value is brought back into its valid range ([`Optimization::step`]).
+
+mod adam;
+mod views;
+
+pub use adam::Adam;
+pub use views::{View, orbit};
+
+use crate::error::{Error, Result};
+use crate::film::Image;
+use crate::integrator::{
+    BoundaryBudget, DiffOptions, GradientLayout, Loss, RenderOptions, loss_gradient, render,
+};
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+
+/// Which terms of the derivative the gradient holds.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum Terms {
+    /// Interior, primary and secondary terms (the default).
+    #[default]
+    Complete,
+    /// The interior term alone (what renderers without boundary terms compute; the ablation).
+    Interior,
+}
+
+/// How to optimise: what, how fast, for how long.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Named parameters to optimise (as [`Scene::parameters`] lists them).
+    pub params: Vec<String>,
+    /// Grid nodes whose values are optimised (as [`Scene::grid_blocks`] lists them).
+    pub grids: Vec<String>,
+    /// Iterations (Adam steps).
+    pub iterations: u32,
+    /// Samples per pixel per view per iteration (loss pass and adjoint pass each).
+    pub spp: u32,
+    /// The image loss.
+    pub loss: Loss,
+    /// Adam's step size for grid values, in the units of the values (scene units).
+    pub learning_rate_grids: f32,
+    /// Adam's step size for named parameters, in each parameter's units.
+    pub learning_rate_params: f32,
+    /// Views per iteration, drawn without replacement from the seed (`None`: all).
+    pub views_per_iteration: Option<usize>,
+    /// Seed of the view choice and of every render.
+    pub seed: u64,
+    /// Derivative terms.
+    pub terms: Terms,
+}
+
+/// One finished iteration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Iteration {
+    /// 0-based index.
+    pub index: u32,
+    /// Mean loss over the iteration's views (before the step).
+    pub loss: f64,
+    /// Euclidean norm of the mean gradient.
+    pub gradient_norm: f64,
+    /// Wall-clock seconds of the iteration.
+    pub seconds: f64,
+    /// Samples whose gradient was dropped as non-finite.
+    pub invalid_samples: u64,
+}
+
+/// An optimisation in progress: the scene, its views and their targets, and Adam's state.
+pub struct Optimization {
+    /// The scene being optimised (its current parameter values).
+    pub scene: Scene,
+    /// The views.
+    pub views: Vec<View>,
+    /// One target image per view.
+    pub targets: Vec<Image>,
+    /// The settings.
+    pub settings: Settings,
+    layout: GradientLayout,
+    adam: Adam,
+    /// Iterations done.
+    pub done: u32,
+}
+
+impl Optimization {
+    /// Checks the problem (a target per view, of the scene's image size; known parameters and grids;
+    /// at least one of them) and selects the parameters.
+    pub fn new(
+        mut scene: Scene,
+        views: Vec<View>,
+        targets: Vec<Image>,
+        settings: Settings,
+    ) -> Result<Self> {
+        if views.is_empty() {
+            return Err(Error::field("views", "at least one view is needed"));
+        }
+        if targets.len() != views.len() {
+            return Err(Error::field(
+                "target",
+                format!(
+                    "{} target images for {} views (one per view)",
+                    targets.len(),
+                    views.len()
+                ),
+            ));
+        }
+        let size = (scene.camera.width, scene.camera.height);
+        if let Some(k) = targets.iter().position(|t| (t.width, t.height) != size) {
+            return Err(Error::field(
+                format!("target.images[{k}]"),
+                format!(
+                    "is {}x{}, the scene's image {}x{}",
+                    targets[k].width, targets[k].height, size.0, size.1
+                ),
+            ));
+        }
+        if settings.params.is_empty() && settings.grids.is_empty() {
+            return Err(Error::field(
+                "optimize",
+                "nothing to optimise: name grids or params",
+            ));
+        }
+        let layout = GradientLayout::select(&mut scene, &settings.params, &settings.grids)?;
+        let adam = Adam::new(layout.entries);
+        Ok(Self {
+            scene,
+            views,
+            targets,
+            settings,
+            layout,
+            adam,
+            done: 0,
+        })
+    }
+
+    /// The parameters' current values, in gradient-entry order.
+    pub fn values(&self) -> Result<Vec<f32>> {
+        let mut out = Vec::with_capacity(self.layout.entries);
+        for p in &self.layout.params {
+            out.push(self.scene.parameter(p)?);
+        }
+        for (block, _) in &self.layout.grids {
+            out.extend_from_slice(&self.scene.grid_values(&block.node)?.values);
+        }
+        Ok(out)
+    }
+
+    /// The views of iteration `index`: all, or `views_per_iteration` of them drawn from the seed.
+    pub fn views_of(&self, index: u32) -> Vec<usize> {
+        let n = self.views.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        let Some(k) = self.settings.views_per_iteration.filter(|&k| k < n) else {
+            return order;
+        };
+        let mut sampler = Sampler::new(self.settings.seed, VIEW_STREAM, index as u64, 0);
+        // A partial Fisher–Yates shuffle.
+        for i in 0..k {
+            let j = i + ((sampler.next_1d() * (n - i) as f32) as usize).min(n - i - 1);
+            order.swap(i, j);
+        }
+        order.truncate(k);
+        order.sort_unstable();
+        order
+    }
+
+    /// One iteration: mean loss and gradient over the iteration's views, one Adam step, values brought
+    /// back into range. Errors: a render failure.
+    pub fn step(&mut self) -> Result<Iteration> {
+        let start = std::time::Instant::now();
+        let index = self.done;
+        let views = self.views_of(index);
+        let mut gradient = vec![0.0f64; self.layout.entries];
+        let mut loss = 0.0;
+        let mut invalid = 0;
+        for &v in &views {
+            let scene = self.views[v].apply(&self.scene)?;
+            let options = self.options(index, v);
+            let g = loss_gradient(
+                &scene,
+                &self.layout,
+                &self.targets[v],
+                self.settings.loss,
+                &options,
+            )?;
+            loss += g.loss;
+            invalid += g.gradient.stats.invalid_derivatives;
+            for (t, d) in gradient.iter_mut().zip(g.gradient.total()) {
+                *t += d;
+            }
+        }
+        let n = views.len() as f64;
+        loss /= n;
+        gradient.iter_mut().for_each(|g| *g /= n);
+        let norm = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+        let named = self.layout.params.len();
+        let rates: Vec<f32> = (0..self.layout.entries)
+            .map(|i| {
+                if i < named {
+                    self.settings.learning_rate_params
+                } else {
+                    self.settings.learning_rate_grids
+                }
+            })
+            .collect();
+        let mut values = self.values()?;
+        let proposed = self.adam.step(&values, &gradient, &rates);
+        self.apply(&mut values, &proposed)?;
+        self.done += 1;
+        Ok(Iteration {
+            index,
+            loss,
+            gradient_norm: norm,
+            seconds: start.elapsed().as_secs_f64(),
+            invalid_samples: invalid,
+        })
+    }
+
+    /// The render options of view `view` at iteration `index`: seeds that differ per iteration and
+    /// view (the adjoint pass takes the next one, so the loss seeds are spaced by 2).
+    fn options(&self, index: u32, view: usize) -> DiffOptions {
+        let per_iteration = 2 * self.views.len() as u64;
+        let seed = self
+            .settings
+            .seed
+            .wrapping_mul(0x9E37_79B9)
+            .wrapping_add(index as u64 * per_iteration + 2 * view as u64);
+        DiffOptions {
+            render: RenderOptions {
+                spp: self.settings.spp,
+                seed,
+                ..RenderOptions::default()
+            },
+            boundary: match self.settings.terms {
+                Terms::Complete => BoundaryBudget::default(),
+                Terms::Interior => BoundaryBudget::NONE,
+            },
+            ..DiffOptions::default()
+        }
+    }
+
+    /// Sets the proposed values, each brought back into its valid range: a named parameter that its
+    /// field rejects (a radius ≤ 0, an albedo > 1, ...) moves halfway back towards its old value, up
+    /// to 20 times, else keeps it; grid values are clamped to `±` the grid box's diagonal.
+    fn apply(&mut self, old: &mut [f32], proposed: &[f32]) -> Result<()> {
+        for (k, name) in self.layout.params.iter().enumerate() {
+            let mut value = proposed[k];
+            for _ in 0..20 {
+                if let Ok(scene) = self.scene.with_parameter(name, value) {
+                    self.scene = scene;
+                    old[k] = value;
+                    break;
+                }
+                value = 0.5 * (value + old[k]);
+            }
+        }
+        for (block, first) in &self.layout.grids {
+            let bound = self.scene.grid_diagonal(&block.node)?;
+            let values = proposed[*first..*first + block.len()]
+                .iter()
+                .map(|v| v.clamp(-bound, bound))
+                .collect();
+            self.scene.set_grid_values(&block.node, values)?;
+        }
+        Ok(())
+    }
+
+    /// The image of view `view` at the current values, `spp` samples per pixel, seed `seed`.
+    pub fn render_view(&self, view: usize, spp: u32, seed: u64) -> Result<Image> {
+        let scene = self.views[view].apply(&self.scene)?;
+        let options = RenderOptions {
+            spp,
+            seed,
+            ..RenderOptions::default()
+        };
+        Ok(render(&scene, &options).0)
+    }
+}
+
+/// The random stream of the views' choice.
+const VIEW_STREAM: u64 = 0x71E5_0F17;
+
+/// The target images of `views` rendered from `scene` at `spp` samples per pixel, seeds `seed + k`.
+pub fn render_targets(scene: &Scene, views: &[View], spp: u32, seed: u64) -> Result<Vec<Image>> {
+    views
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let s = v.apply(scene)?;
+            let options = RenderOptions {
+                spp,
+                seed: seed.wrapping_add(k as u64),
+                ..RenderOptions::default()
+            };
+            Ok(render(&s, &options).0)
+        })
+        .collect()
+}
