@@ -18,9 +18,9 @@
 //!    mean within 4 standard errors of 0, and that error must be small (see [`loss_gradient_matches_finite_differences`] for why the
 //!    difference is taken of `mean((I_s − T)(I_{s+1} − T))`, and the measured numbers).
 //! 4. **Determinism**: the gradient is bit for bit the same with 1, 2 and 3 threads.
-//! 5. **Hard cases** (scenes of `tests/hard_cases.rs`, and a camera inside a closed grid shape): with
-//!    every parameter of the scene selected, no gradient entry is NaN or infinite and no sample's
-//!    gradient was dropped as non-finite.
+//! 5. **Hard cases** (scenes of `tests/hard_cases.rs`, shared in [`common::hard_scenes`], and a camera
+//!    inside a closed grid shape): with every parameter of the scene selected, no gradient entry is NaN
+//!    or infinite and no sample's gradient was dropped as non-finite.
 //!
 //! Images are 16–24 px with a few samples per pixel: the whole file runs in about 10 s (release, two
 //! cores), most of it the finite differences.
@@ -28,6 +28,7 @@
 mod common;
 
 use common::Rng;
+use common::hard_scenes;
 use implicit_psdr::film::{Image, Normalization};
 use implicit_psdr::integrator::gradient::adjoint_seed;
 use implicit_psdr::integrator::{
@@ -704,132 +705,58 @@ fn assert_finite_gradient(label: &str, mut scene: Scene) {
     assert!(nonzero > 0, "{label}: the gradient is zero");
 }
 
-/// A `direct` scene as `tests/hard_cases.rs` builds them (the scenes below are theirs, all at 24 px;
-/// 4 spp, 4 primary and 8 secondary boundary samples per pixel).
-fn hard_scene(size: u32, camera: &str, shapes: &str, emitters: &str) -> Scene {
-    common::deriv::scene_json(&format!(
-        r#"{{"camera": {{{camera}, "up": [0, 1, 0], "width": {size}, "height": {size}, "filter": "tent"}},
-            "integrator": {{"type": "direct"}}, "shapes": [{shapes}], "emitters": [{emitters}]}}"#
-    ))
-}
+// The scenes of `tests/hard_cases.rs` (`common::hard_scenes`), all at 24 px; 4 spp, 4 primary and 8
+// secondary boundary samples per pixel.
 
-const LIGHT: &str = r#"{"name": "light", "type": "rectangle", "center": [1.5, 4, 1], "normal": [0, -1, 0],
-    "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}"#;
-
-const SKY: &str = r#"{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}"#;
-
-fn diffuse(a: f32) -> String {
-    format!(r#""bsdf": {{"type": "diffuse", "albedo": [{a}, {a}, {a}]}}"#)
-}
-
-fn slab() -> String {
-    format!(
-        r#"{{"name": "floor", "sdf": {{"type": "box", "center": [0, -0.1, 0], "half_size": [2.5, 0.1, 2.5],
-            "rounding": 0.02}}, {}}}"#,
-        diffuse(0.5)
-    )
-}
-
-/// hard_cases.rs `grazing_silhouette`: a torus nearly edge-on (cusps of the silhouette).
+/// [`hard_scenes::grazing_silhouette`]: a torus nearly edge-on (cusps of the silhouette).
 #[test]
 fn hard_case_grazing_silhouette_is_finite() {
-    let s = hard_scene(
-        24,
-        r#""origin": [0, 0.3, 3], "target": [0, 0, 0], "fov_y": 40"#,
-        &format!(
-            r#"{{"name": "donut", "sdf": {{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, -0.14],
-                "major_radius": 0.7, "minor_radius": 0.2}}, {}}}"#,
-            diffuse(0.7)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
-    assert_finite_gradient("grazing_silhouette", s);
+    assert_finite_gradient("grazing_silhouette", hard_scenes::grazing_silhouette(24));
 }
 
-/// hard_cases.rs `shadow_on_grazing_surface`: the floor and a shadow seen at 3–7°.
+/// [`hard_scenes::shadow_on_grazing_surface`]: the floor and a shadow seen at 3–7°.
 #[test]
 fn hard_case_shadow_on_grazing_surface_is_finite() {
-    let s = hard_scene(
-        24,
-        r#""origin": [0, 0.35, 5], "target": [0, 0.2, 0], "fov_y": 35"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.4}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        LIGHT,
+    assert_finite_gradient(
+        "shadow_on_grazing_surface",
+        hard_scenes::shadow_on_grazing_surface(24),
     );
-    assert_finite_gradient("shadow_on_grazing_surface", s);
 }
 
-/// hard_cases.rs `two_silhouettes_on_a_camera_ray`: one line of sight tangent to two spheres.
+/// [`hard_scenes::two_silhouettes_on_a_camera_ray`]: one line of sight tangent to two spheres.
 #[test]
 fn hard_case_tangent_camera_ray_is_finite() {
-    let offset = (0.2f32 / 3.0).asin();
-    let (x, z) = (6.0 * offset.sin(), 3.0 - 6.0 * offset.cos());
-    let s = hard_scene(
-        24,
-        r#""origin": [0, 0, 3], "target": [0, 0, 0], "fov_y": 20"#,
-        &format!(
-            r#"{{"name": "near", "sdf": {{"type": "sphere", "center": [0, 0, 0], "radius": 0.2}}, {}}},
-               {{"name": "far", "sdf": {{"type": "sphere", "center": [{x}, 0, {z}], "radius": 0.5}}, {}}}"#,
-            diffuse(0.8),
-            diffuse(0.3)
-        ),
-        &format!("{LIGHT}, {SKY}"),
+    assert_finite_gradient(
+        "two_silhouettes_on_a_camera_ray",
+        hard_scenes::two_silhouettes_on_a_camera_ray(24),
     );
-    assert_finite_gradient("two_silhouettes_on_a_camera_ray", s);
 }
 
-/// hard_cases.rs `two_silhouettes_on_a_light_ray`: one shadow ray tangent to two spheres.
+/// [`hard_scenes::two_silhouettes_on_a_light_ray`]: one shadow ray tangent to two spheres.
 #[test]
 fn hard_case_tangent_light_ray_is_finite() {
-    let s = hard_scene(
-        24,
-        r#""origin": [0, 3, 3], "target": [0, 0.5, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "upper", "sdf": {{"type": "sphere", "center": [0, 2.5, 0], "radius": 0.15}}, {}}},
-               {{"name": "lower", "sdf": {{"type": "sphere", "center": [0, 1.5, 0], "radius": 0.25}}, {}}}"#,
-            slab(),
-            diffuse(0.7),
-            diffuse(0.7)
-        ),
-        r#"{"name": "light", "type": "rectangle", "center": [0, 4, 0], "normal": [0, -1, 0],
-            "u": [1, 0, 0], "size": [0.2, 0.2], "radiance": [300, 300, 300]}"#,
+    assert_finite_gradient(
+        "two_silhouettes_on_a_light_ray",
+        hard_scenes::two_silhouettes_on_a_light_ray(24),
     );
-    assert_finite_gradient("two_silhouettes_on_a_light_ray", s);
 }
 
-/// hard_cases.rs `camera_close_to_a_surface`: the camera 0.1 from a ball.
+/// [`hard_scenes::camera_close_to_a_surface`]: the camera 0.1 from a ball.
 #[test]
 fn hard_case_camera_close_to_a_surface_is_finite() {
-    let s = hard_scene(
-        24,
-        r#""origin": [0.6, 1.1, 1.5], "target": [0, 0, 0], "fov_y": 60"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0.6, 1.1, 0.7], "radius": 0.7}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        &format!("{LIGHT}, {SKY}"),
+    assert_finite_gradient(
+        "camera_close_to_a_surface",
+        hard_scenes::camera_close_to_a_surface(24),
     );
-    assert_finite_gradient("camera_close_to_a_surface", s);
 }
 
-/// hard_cases.rs `light_touching_an_occluder`: a sphere light touching the ball (`G ∝ 1/d²`).
+/// [`hard_scenes::light_touching_an_occluder`]: a sphere light touching the ball (`G ∝ 1/d²`).
 #[test]
 fn hard_case_light_touching_an_occluder_is_finite() {
-    let s = hard_scene(
-        24,
-        r#""origin": [0, 3, 3.5], "target": [0, 0.5, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.8, 0], "radius": 0.5}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        r#"{"name": "light", "type": "sphere", "center": [0.7, 0.8, 0], "radius": 0.2, "radiance": [20, 20, 20]}"#,
+    assert_finite_gradient(
+        "light_touching_an_occluder",
+        hard_scenes::light_touching_an_occluder(24),
     );
-    assert_finite_gradient("light_touching_an_occluder", s);
 }
 
 /// The camera inside a closed grid shape: a rounded box with a spherical cavity (baked at 14³), lit by

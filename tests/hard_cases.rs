@@ -1,8 +1,9 @@
-//! Hard cases of the complete derivative (interior + primary + secondary): each renders a tiny image,
-//! checks that no term holds a NaN or an infinity in any channel ([`common::deriv::assert_finite`]), and
-//! bounds the error against central finite differences with common random numbers
-//! ([`common::deriv::check_against_fd`]: blurred relative L2, region sums on the silhouette ring and the
-//! smooth pixels, primary term zero off the ring, interior alone outside the bound).
+//! Hard cases of the complete derivative (interior + primary + secondary): each renders a tiny image of
+//! one of the scenes of [`common::hard_scenes`] (which says why each is hard), checks that no term holds
+//! a NaN or an infinity in any channel ([`common::deriv::assert_finite`]), and bounds the error against
+//! central finite differences with common random numbers ([`common::deriv::check_against_fd`]: blurred
+//! relative L2, region sums on the silhouette ring and the smooth pixels, primary term zero off the
+//! ring, interior alone outside the bound).
 //!
 //! Bounds come from two runs with independent seeds (`PSDR_TEST_SEED` unset and `=1`: estimator and FD
 //! reseeded), quoted next to each bound as `(seed 0, seed 1)`: each bound is twice the larger of the two,
@@ -13,22 +14,9 @@
 mod common;
 
 use common::deriv::*;
+use common::hard_scenes::{self, diffuse};
 use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::scene::Scene;
-
-/// A `direct` scene of `size × size` pixels (tent filter) from JSON fragments: the camera's `origin`,
-/// `target` and `fov_y`, the shapes and the emitters.
-fn scene(size: u32, camera: &str, shapes: &str, emitters: &str) -> Scene {
-    scene_json(&format!(
-        r#"{{"camera": {{{camera}, "up": [0, 1, 0], "width": {size}, "height": {size}, "filter": "tent"}},
-            "integrator": {{"type": "direct"}}, "shapes": [{shapes}], "emitters": [{emitters}]}}"#
-    ))
-}
-
-const LIGHT: &str = r#"{"name": "light", "type": "rectangle", "center": [1.5, 4, 1], "normal": [0, -1, 0],
-    "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}"#;
-
-const SKY: &str = r#"{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}"#;
 
 fn budget() -> Budget {
     Budget {
@@ -52,36 +40,10 @@ fn check(name: &'static str, h: f32, l2: f64, sum: f64) -> Check {
     Check { name, h, l2, sum }
 }
 
-fn diffuse(a: f32) -> String {
-    format!(r#""bsdf": {{"type": "diffuse", "albedo": [{a}, {a}, {a}]}}"#)
-}
-
-/// A finite floor slab (top at `y = 0`, slightly rounded so it has no crease). Not an infinite plane:
-/// under an environment, rays leaving the floor at shallow angles march along an unbounded plane for
-/// hundreds of steps (measured: a 32×32 image at 1024 spp, 12.4 s with a plane and a sky, 1.6 s with the
-/// plane alone, 0.6 s with this slab).
-fn slab() -> String {
-    format!(
-        r#"{{"name": "floor", "sdf": {{"type": "box", "center": [0, -0.1, 0], "half_size": [2.5, 0.1, 2.5],
-            "rounding": 0.02}}, {}}}"#,
-        diffuse(0.5)
-    )
-}
-
-/// A torus seen nearly edge-on (its axis tilted 8° from the image plane): the silhouette's ends are
-/// cusps where its tangent runs almost along the view ray (`|P'T| → 0`).
+/// The cusps of a torus's silhouette seen nearly edge-on ([`hard_scenes::grazing_silhouette`]).
 #[test]
 fn grazing_silhouette() {
-    let s = scene(
-        24,
-        r#""origin": [0, 0.3, 3], "target": [0, 0, 0], "fov_y": 40"#,
-        &format!(
-            r#"{{"name": "donut", "sdf": {{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, -0.14],
-                "major_radius": 0.7, "minor_radius": 0.2}}, {}}}"#,
-            diffuse(0.7)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
+    let s = hard_scenes::grazing_silhouette(24);
     measure(
         "grazing_silhouette",
         &s,
@@ -97,20 +59,10 @@ fn grazing_silhouette() {
     );
 }
 
-/// A ball seen by a camera almost level with the floor: the floor and the ball's shadow on it are seen
-/// at a grazing angle (3–7°: the floor's film Jacobian is small, its pixels cover long strips).
+/// The floor and a ball's shadow seen at 3–7° ([`hard_scenes::shadow_on_grazing_surface`]).
 #[test]
 fn shadow_on_grazing_surface() {
-    let s = scene(
-        32,
-        r#""origin": [0, 0.35, 5], "target": [0, 0.2, 0], "fov_y": 35"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.4}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        LIGHT,
-    );
+    let s = hard_scenes::shadow_on_grazing_surface(32);
     measure(
         "shadow_on_grazing_surface",
         &s,
@@ -126,21 +78,10 @@ fn shadow_on_grazing_surface() {
     );
 }
 
-/// A large box with little rounding above the floor: its flat faces (κ = 0: every tangent line is
-/// rejected) are seen and cast the shadow; only the thin rounded edges are silhouettes.
+/// Flat faces, on which every tangent line is rejected ([`hard_scenes::flat_faces`]).
 #[test]
 fn flat_faces() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3, 4], "target": [0, 0.3, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "slab", "sdf": {{"type": "box", "center": [0, 0.6, 0], "half_size": [0.8, 0.2, 0.6],
-                "rounding": 0.05}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        LIGHT,
-    );
+    let s = hard_scenes::flat_faces(32);
     measure(
         "flat_faces",
         &s,
@@ -156,25 +97,11 @@ fn flat_faces() {
     );
 }
 
-/// Concave tangent directions: a torus lying on its side above the floor, the light shining through its
-/// hole (its inner side is saddle-shaped), and a smooth union of two spheres (a saddle at the neck).
+/// Saddle-shaped surfaces: a torus's inner side and a smooth union's neck
+/// ([`hard_scenes::concave_tangent_directions`]).
 #[test]
 fn concave_tangent_directions() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3.2, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "donut", "sdf": {{"type": "torus", "center": [-0.6, 0.5, 0], "axis": [0, 1, 0],
-                "major_radius": 0.5, "minor_radius": 0.15}}, {}}},
-               {{"name": "blob", "sdf": {{"type": "smooth_union", "k": 0.3, "children": [
-                   {{"type": "sphere", "center": [0.7, 0.4, 0], "radius": 0.3}},
-                   {{"type": "sphere", "center": [0.7, 0.95, 0], "radius": 0.25}}]}}, {}}}"#,
-            slab(),
-            diffuse(0.7),
-            diffuse(0.7)
-        ),
-        LIGHT,
-    );
+    let s = hard_scenes::concave_tangent_directions(32);
     measure(
         "concave_tangent_directions",
         &s,
@@ -190,9 +117,8 @@ fn concave_tangent_directions() {
     );
 }
 
-/// Two silhouettes on one camera ray: a far sphere partly behind a near one, its image circle centred on
-/// the near one's, so that the two circles cross; at each crossing one line of sight grazes both
-/// spheres (the background of the near silhouette jumps there from the far sphere to the sky).
+/// One line of sight grazing two spheres where their image circles cross
+/// ([`hard_scenes::two_silhouettes_on_a_camera_ray`]).
 ///
 /// Not tested: the two circles internally tangent (far centre offset by the difference of the angular
 /// radii). There the derivative is continuous but only `√ε`-regular in the offset `ε` (measured: the
@@ -201,20 +127,7 @@ fn concave_tangent_directions() {
 /// (it gives ≈ 0); the estimator there gave a sum of 25–27 against the limit ≈ 13 (measured when the term was written).
 #[test]
 fn two_silhouettes_on_a_camera_ray() {
-    // The far centre's direction is offset by the near sphere's angular radius.
-    let offset = (0.2f32 / 3.0).asin();
-    let (x, z) = (6.0 * offset.sin(), 3.0 - 6.0 * offset.cos());
-    let s = scene(
-        32,
-        r#""origin": [0, 0, 3], "target": [0, 0, 0], "fov_y": 20"#,
-        &format!(
-            r#"{{"name": "near", "sdf": {{"type": "sphere", "center": [0, 0, 0], "radius": 0.2}}, {}}},
-               {{"name": "far", "sdf": {{"type": "sphere", "center": [{x}, 0, {z}], "radius": 0.5}}, {}}}"#,
-            diffuse(0.8),
-            diffuse(0.3)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
+    let s = hard_scenes::two_silhouettes_on_a_camera_ray(32);
     measure(
         "two_silhouettes_on_a_camera_ray",
         &s,
@@ -230,23 +143,10 @@ fn two_silhouettes_on_a_camera_ray() {
     );
 }
 
-/// Two spheres whose shadow boundaries coincide: on one vertical line under a small light, radii
-/// proportional to the distance from it, so one tangent line from the floor touches both.
+/// One shadow ray tangent to two spheres ([`hard_scenes::two_silhouettes_on_a_light_ray`]).
 #[test]
 fn two_silhouettes_on_a_light_ray() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3, 3], "target": [0, 0.5, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "upper", "sdf": {{"type": "sphere", "center": [0, 2.5, 0], "radius": 0.15}}, {}}},
-               {{"name": "lower", "sdf": {{"type": "sphere", "center": [0, 1.5, 0], "radius": 0.25}}, {}}}"#,
-            slab(),
-            diffuse(0.7),
-            diffuse(0.7)
-        ),
-        r#"{"name": "light", "type": "rectangle", "center": [0, 4, 0], "normal": [0, -1, 0],
-            "u": [1, 0, 0], "size": [0.2, 0.2], "radiance": [300, 300, 300]}"#,
-    );
+    let s = hard_scenes::two_silhouettes_on_a_light_ray(32);
     measure(
         "two_silhouettes_on_a_light_ray",
         &s,
@@ -262,20 +162,10 @@ fn two_silhouettes_on_a_light_ray() {
     );
 }
 
-/// A thin rod (a capsule 0.03 thick, about one pixel wide) above the floor, and its thin shadow.
+/// A rod about one pixel wide and its thin shadow ([`hard_scenes::thin_feature`]).
 #[test]
 fn thin_feature() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "rod", "sdf": {{"type": "capsule", "a": [-0.9, 0.6, 0.3], "b": [0.9, 0.7, -0.3],
-                "radius": 0.015}}, {}}}"#,
-            slab(),
-            diffuse(0.9)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
+    let s = hard_scenes::thin_feature(32);
     measure(
         "thin_feature",
         &s,
@@ -286,19 +176,10 @@ fn thin_feature() {
     );
 }
 
-/// A ball under two pixels across (radius 0.9 px) above the floor, and its shadow.
+/// A ball under two pixels across and its shadow ([`hard_scenes::tiny_object`]).
 #[test]
 fn tiny_object() {
-    let s = scene(
-        24,
-        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "dot", "sdf": {{"type": "sphere", "center": [0.2, 0.5, 0], "radius": 0.1}}, {}}}"#,
-            slab(),
-            diffuse(0.9)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
+    let s = hard_scenes::tiny_object(24);
     // Few camera samples hit the dot: its interior term needs more of them.
     let budget = Budget {
         spp: 256,
@@ -316,20 +197,10 @@ fn tiny_object() {
     );
 }
 
-/// A ball cut by the image's left border, its shadow too.
+/// A ball and its shadow cut by the image's border ([`hard_scenes::partly_outside_the_image`]).
 #[test]
 fn partly_outside_the_image() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3, 3], "target": [0, 0.3, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [-1.4, 0.6, 0], "radius": 0.5}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        r#"{"name": "light", "type": "rectangle", "center": [0, 4, 1], "normal": [0, -1, 0],
-            "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}"#,
-    );
+    let s = hard_scenes::partly_outside_the_image(32);
     measure(
         "partly_outside_the_image",
         &s,
@@ -345,20 +216,10 @@ fn partly_outside_the_image() {
     );
 }
 
-/// The camera 0.1 from a ball's surface, looking past it at the floor: the silhouette is close and
-/// large, seen through a wide perspective.
+/// The camera 0.1 from a ball's surface ([`hard_scenes::camera_close_to_a_surface`]).
 #[test]
 fn camera_close_to_a_surface() {
-    let s = scene(
-        24,
-        r#""origin": [0.6, 1.1, 1.5], "target": [0, 0, 0], "fov_y": 60"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0.6, 1.1, 0.7], "radius": 0.7}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        &format!("{LIGHT}, {SKY}"),
-    );
+    let s = hard_scenes::camera_close_to_a_surface(24);
     // The interior term of the close, large silhouette is noisy.
     let budget = Budget {
         spp: 128,
@@ -380,21 +241,12 @@ fn camera_close_to_a_surface() {
     );
 }
 
-/// A sphere light touching the ball that shadows the floor: the shadow segments `x_B x_D` become
-/// arbitrarily short near the contact. The parameter slides the ball along the contact's tangent plane
-/// (moving it towards the light would make them intersect: a kink FD averages over).
+/// A sphere light touching the ball that shadows the floor
+/// ([`hard_scenes::light_touching_an_occluder`]). The parameter slides the ball along the contact's
+/// tangent plane (moving it towards the light would make them intersect: a kink FD averages over).
 #[test]
 fn light_touching_an_occluder() {
-    let s = scene(
-        32,
-        r#""origin": [0, 3, 3.5], "target": [0, 0.5, 0], "fov_y": 45"#,
-        &format!(
-            r#"{}, {{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0.8, 0], "radius": 0.5}}, {}}}"#,
-            slab(),
-            diffuse(0.7)
-        ),
-        r#"{"name": "light", "type": "sphere", "center": [0.7, 0.8, 0], "radius": 0.2, "radiance": [20, 20, 20]}"#,
-    );
+    let s = hard_scenes::light_touching_an_occluder(32);
     // Near the contact `G ∝ 1/d²` is singular: the interior term's samples there are heavy-tailed
     // (ball.center.z, 64 spp: blurred rel L2 0.12 and 0.38 with two seeds, the interior's sum −110 and
     // −175). More camera samples, and the parameter whose interior term matters less.

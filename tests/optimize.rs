@@ -69,6 +69,9 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
     }
     println!("loss {first} -> {last}");
     for ((name, got), want) in names.iter().zip(&values).zip(&true_values) {
-        assert!((got - want).abs() <= 0.02 * want.abs(), "{name}: {got} vs {want}");
+        assert!(
+            (got - want).abs() <= 0.02 * want.abs(),
+            "{name}: {got} vs {want}"
+        );
     }
 }

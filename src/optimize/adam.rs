@@ -75,6 +75,9 @@ mod tests {
     fn first_step_is_the_rate() {
         let mut adam = Adam::new(2);
         let x = adam.step(&[1.0, 1.0], &[3.0, -1e-3], &[0.1, 0.2]);
-        assert!((x[0] - 0.9).abs() < 1e-6 && (x[1] - 1.2).abs() < 1e-6, "{x:?}");
+        assert!(
+            (x[0] - 0.9).abs() < 1e-6 && (x[1] - 1.2).abs() < 1e-6,
+            "{x:?}"
+        );
     }
 }

@@ -72,7 +72,9 @@ impl Sdf {
     /// Whether some grid in the tree has its values selected for differentiation.
     pub fn grid_values_selected(&self) -> bool {
         let mut any = false;
-        walk(self, "", &mut |_, _, s, _| any |= *s != GridValues::Constant);
+        walk(self, "", &mut |_, _, s, _| {
+            any |= *s != GridValues::Constant
+        });
         any
     }
 

@@ -98,3 +98,4 @@ impl Rng {
 }
 
 pub mod deriv;
+pub mod hard_scenes;
