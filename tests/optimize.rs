@@ -51,6 +51,9 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
         views_per_iteration: None,
         seed: 1,
         terms: Terms::Complete,
+        upsample_at: vec![],
+        redistance_every: None,
+        laplacian: 0.0,
     };
     let mut opt = Optimization::new(start, views, targets, settings).unwrap();
     // A step decay: Adam's steps are about the learning rate, so the last rate sets the noise floor.

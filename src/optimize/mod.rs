@@ -7,6 +7,7 @@
 //! rates), then every value is brought back into its valid range ([`Optimization::step`]).
 
 mod adam;
+pub mod metrics;
 mod views;
 
 pub use adam::Adam;
@@ -53,6 +54,15 @@ pub struct Settings {
     pub seed: u64,
     /// Derivative terms.
     pub terms: Terms,
+    /// Iterations before which every optimised grid is refined `n → 2n − 1` (the same surface,
+    /// [`crate::sdf::GridData::refined`]); Adam's state starts afresh.
+    pub upsample_at: Vec<u32>,
+    /// Every this many iterations, the grids' values are reset to the signed distance of their zero
+    /// set ([`crate::sdf::GridData::redistanced`]), which keeps the Lipschitz bound near 1.
+    pub redistance_every: Option<u32>,
+    /// Weight `λ` of the smoothness term `λ · mean over interior lattice nodes of (Δc)²` (`Δ` the
+    /// 7-point Laplacian of the values, in value units) added to the loss; 0 for none.
+    pub laplacian: f32,
 }
 
 /// One finished iteration.
@@ -172,6 +182,7 @@ impl Optimization {
     pub fn step(&mut self) -> Result<Iteration> {
         let start = std::time::Instant::now();
         let index = self.done;
+        self.edit_grids(index)?;
         let views = self.views_of(index);
         let mut gradient = vec![0.0f64; self.layout.entries];
         let mut loss = 0.0;
@@ -195,6 +206,13 @@ impl Optimization {
         let n = views.len() as f64;
         loss /= n;
         gradient.iter_mut().for_each(|g| *g /= n);
+        if self.settings.laplacian > 0.0 {
+            for (block, first) in &self.layout.grids {
+                let data = self.scene.grid_values(&block.node)?;
+                let entries = &mut gradient[*first..*first + block.len()];
+                loss += smoothness(&data, self.settings.laplacian as f64, entries);
+            }
+        }
         let norm = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
         let named = self.layout.params.len();
         let rates: Vec<f32> = (0..self.layout.entries)
@@ -217,6 +235,37 @@ impl Optimization {
             seconds: start.elapsed().as_secs_f64(),
             invalid_samples: invalid,
         })
+    }
+
+    /// The grid edits due before iteration `index`: refinement (`upsample_at`, which also restarts
+    /// Adam and re-selects the grids) and redistancing (`redistance_every`).
+    fn edit_grids(&mut self, index: u32) -> Result<()> {
+        let nodes: Vec<String> = self.layout.grids.iter().map(|(b, _)| b.node.clone()).collect();
+        let upsample = self.settings.upsample_at.contains(&index);
+        let redistance = self
+            .settings
+            .redistance_every
+            .is_some_and(|k| k > 0 && index > 0 && index % k == 0);
+        if nodes.is_empty() || !(upsample || redistance) {
+            return Ok(());
+        }
+        for node in &nodes {
+            let mut data = (*self.scene.grid_values(node)?).clone();
+            if upsample {
+                data = data.refined();
+            }
+            if redistance {
+                let [lo, hi] = self.scene.grid_box(node)?;
+                data = data.redistanced(lo, hi);
+            }
+            self.scene.set_grid(node, data)?;
+        }
+        if upsample {
+            self.layout =
+                GradientLayout::select(&mut self.scene, &self.settings.params, &self.settings.grids)?;
+            self.adam = Adam::new(self.layout.entries);
+        }
+        Ok(())
     }
 
     /// The render options of view `view` at iteration `index`: seeds that differ per iteration and
@@ -298,4 +347,67 @@ pub fn render_targets(scene: &Scene, views: &[View], spp: u32, seed: u64) -> Res
             Ok(render(&s, &options).0)
         })
         .collect()
+}
+
+/// The smoothness term `λ · mean_i (Δc)_i²` over the interior nodes of `data` (`Δ` the 7-point
+/// Laplacian in value units); adds its gradient `(2λ/n) Δᵀ(Δc)` to `gradient` and returns its value.
+fn smoothness(data: &crate::sdf::GridData, lambda: f64, gradient: &mut [f64]) -> f64 {
+    let [nx, ny, nz] = data.dims;
+    let index = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
+    let c = &data.values;
+    let interior = (nx - 2) * (ny - 2) * (nz - 2);
+    if interior == 0 {
+        return 0.0;
+    }
+    let scale = 2.0 * lambda / interior as f64;
+    let mut sum = 0.0;
+    for z in 1..nz - 1 {
+        for y in 1..ny - 1 {
+            for x in 1..nx - 1 {
+                let i = index(x, y, z);
+                let neighbours = [
+                    index(x - 1, y, z),
+                    index(x + 1, y, z),
+                    index(x, y - 1, z),
+                    index(x, y + 1, z),
+                    index(x, y, z - 1),
+                    index(x, y, z + 1),
+                ];
+                let lap: f64 =
+                    neighbours.iter().map(|&j| c[j] as f64).sum::<f64>() - 6.0 * c[i] as f64;
+                sum += lap * lap;
+                gradient[i] -= 6.0 * scale * lap;
+                for j in neighbours {
+                    gradient[j] += scale * lap;
+                }
+            }
+        }
+    }
+    lambda * sum / interior as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sdf::GridData;
+
+    /// The smoothness term's gradient against central differences of its value.
+    #[test]
+    fn smoothness_gradient_matches_differences() {
+        let dims = [5, 4, 6];
+        let values: Vec<f32> = (0..120).map(|i| ((i * 31 % 17) as f32 - 8.0) * 0.1).collect();
+        let data = GridData::new(dims, values.clone(), "test").unwrap();
+        let mut gradient = vec![0.0; 120];
+        smoothness(&data, 0.7, &mut gradient);
+        for i in [0, 7, 33, 61, 119] {
+            let at = |d: f32| {
+                let mut v = values.clone();
+                v[i] += d;
+                smoothness(&GridData::new(dims, v, "test").unwrap(), 0.7, &mut [0.0; 120])
+            };
+            let h = 1e-2;
+            let fd = (at(h) - at(-h)) / (2.0 * h as f64);
+            assert!((gradient[i] - fd).abs() < 1e-4 * fd.abs().max(1.0), "{i}: {} vs {fd}", gradient[i]);
+        }
+    }
 }

@@ -141,6 +141,34 @@ impl Scene {
         scene.refreshed()
     }
 
+    /// Replaces grid node `node`'s samples by `data` (any dimensions; same box) and recomputes what
+    /// depends on them. If the dimensions change, the node's selection is cleared (its gradient entries
+    /// no longer fit): select it again.
+    pub fn set_grid(&mut self, node: &str, data: GridData) -> Result<()> {
+        let old = self.grid_values(node)?;
+        data.validate(&format!("{node}.values"))?;
+        let resized = data.dims != old.dims;
+        let data = Arc::new(data);
+        for shape in &mut self.shapes {
+            let prefix = root_prefix(&shape.name, &shape.sdf);
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, s, _| {
+                if n == node {
+                    *d = data.clone();
+                    if resized {
+                        *s = GridValues::Constant;
+                    }
+                }
+            });
+        }
+        *self = self.refreshed();
+        Ok(())
+    }
+
+    /// Grid node `node`'s box `[bbox_min, bbox_max]`.
+    pub fn grid_box(&self, node: &str) -> Result<[glam::Vec3; 2]> {
+        Ok(self.grid(node)?.1)
+    }
+
     /// Replaces the values of grid node `node` (same layout: `values[(z · ny + y) · nx + x]`, as many
     /// as before, all finite) and recomputes what depends on them (bounds, Lipschitz bounds, tracer
     /// tolerance), keeping every selection: the next render sees the new surface.

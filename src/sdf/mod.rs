@@ -28,6 +28,7 @@ mod bake;
 mod creases;
 mod csg;
 mod grid;
+mod grid_edit;
 pub mod interval;
 mod npy;
 mod primitives;
