@@ -78,3 +78,107 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
         );
     }
 }
+
+/// A grid shape `blob` (a sphere baked at 16³ over `[-1.2, 1.2]³`) on a floor, and the target scene in
+/// which `blob` is two blended spheres; light and sky as in [`scene`], `size × size` pixels.
+fn grid_scenes(dir: &std::path::Path, size: u32) -> (Scene, Scene) {
+    use implicit_psdr::sdf::{Sdf, bake, write_npy};
+    let (lo, hi) = (glam::Vec3::splat(-1.2), glam::Vec3::splat(1.2));
+    let start = bake(&Sdf::sphere([0.0, 0.0, 0.0], 0.7), lo, hi, 16);
+    write_npy(&dir.join("start.npy"), &start).unwrap();
+    let common = |shape: &str| {
+        format!(
+            r#"{{
+      "camera": {{"origin": [0, 1.5, 3.5], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
+                 "width": {size}, "height": {size}, "filter": "tent"}},
+      "integrator": {{"type": "direct"}},
+      "shapes": [
+        {{"name": "blob", "sdf": {shape}, "bsdf": {{"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}}},
+        {{"name": "floor", "sdf": {{"type": "box", "center": [0, -1.7, 0], "half_size": [4, 0.5, 4],
+         "rounding": 0.1}}, "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}
+      ],
+      "emitters": [
+        {{"name": "light", "type": "rectangle", "center": [1.5, 4, 1], "normal": [0, -1, 0],
+         "u": [1, 0, 0], "size": [1.5, 1.5], "radiance": [25, 25, 25]}},
+        {{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}}
+      ]
+    }}"#
+        )
+    };
+    let grid = r#"{"type": "grid", "file": "start.npy", "bbox_min": [-1.2, -1.2, -1.2],
+                   "bbox_max": [1.2, 1.2, 1.2]}"#;
+    let target = r#"{"type": "smooth_union", "k": 0.3, "children": [
+        {"type": "sphere", "center": [-0.35, 0.0, 0.0], "radius": 0.55},
+        {"type": "sphere", "center": [0.4, 0.15, 0.1], "radius": 0.45}]}"#;
+    (
+        parse(&common(grid), dir).unwrap(),
+        parse(&common(target), dir).unwrap(),
+    )
+}
+
+/// IoU of `blob` in the two scenes over the grid box.
+fn blob_iou(a: &Scene, b: &Scene) -> f64 {
+    use implicit_psdr::math::Aabb;
+    let region = Aabb::new(glam::Vec3::splat(-1.2), glam::Vec3::splat(1.2));
+    implicit_psdr::optimize::metrics::iou(
+        a.shape_named("blob").unwrap(),
+        b.shape_named("blob").unwrap(),
+        region,
+        48,
+    )
+}
+
+/// Runs the 16³, 24×24, 4-view problem for 30 iterations with `terms` and `seed`: (first loss, mean
+/// of the last five losses, IoU before, IoU after).
+fn grid_run(terms: Terms, seed: u64) -> (f64, f64, f64, f64) {
+    use implicit_psdr::optimize::orbit;
+    let dir = std::env::temp_dir().join(format!(
+        "psdr-optimize-grid-{}-{seed}-{terms:?}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (start, target) = grid_scenes(&dir, 24);
+    let views = orbit(4, 3.5, 1.5, glam::Vec3::ZERO, 40.0);
+    let targets = render_targets(&target, &views, 64, 500).unwrap();
+    let settings = Settings {
+        params: vec![],
+        grids: vec!["blob".into()],
+        iterations: 0,
+        spp: 4,
+        loss: Loss::L2,
+        learning_rate_grids: 0.02,
+        learning_rate_params: 0.0,
+        views_per_iteration: None,
+        seed,
+        terms,
+        upsample_at: vec![],
+        redistance_every: Some(10),
+        laplacian: 0.0,
+    };
+    let iou_before = blob_iou(&start, &target);
+    let mut opt = Optimization::new(start, views, targets, settings).unwrap();
+    let losses: Vec<f64> = (0..30).map(|_| opt.step().unwrap().loss).collect();
+    let iou_after = blob_iou(&opt.scene, &target);
+    let _ = std::fs::remove_dir_all(&dir);
+    let last = losses[25..].iter().sum::<f64>() / 5.0;
+    (losses[0], last, iou_before, iou_after)
+}
+
+/// A 16³ grid from 4 orbit views at 24×24 for 30 iterations: the loss falls and the IoU with the
+/// target shape rises; with the interior term alone (what renderers without boundary terms compute)
+/// it does not. The loss at 4 spp is mostly the images' noise, so it cannot fall far. Measured (seeds 3
+/// and 4): complete, loss × 0.68 and × 0.62, IoU 0.52 → 0.82 and 0.84; interior alone, loss × 1.05 and
+/// × 0.93, IoU 0.52 → 0.47 and 0.48. The ordering holds for both seeds, so it is asserted.
+#[test]
+fn a_grid_moves_towards_the_target_shape_only_with_the_boundary_terms() {
+    let (first, last, before, after) = grid_run(Terms::Complete, 3);
+    println!("complete: loss {first} -> {last}; IoU {before} -> {after}");
+    assert!(last < 0.8 * first, "loss {first} -> {last}");
+    assert!(after > before + 0.2, "IoU {before} -> {after}");
+    let (_, interior_last, _, interior_after) = grid_run(Terms::Interior, 3);
+    println!("interior alone: loss {first} -> {interior_last}; IoU {before} -> {interior_after}");
+    assert!(
+        after > interior_after + 0.2,
+        "IoU complete {after}, interior alone {interior_after}"
+    );
+}

@@ -7,6 +7,7 @@
 //! rates), then every value is brought back into its valid range ([`Optimization::step`]).
 
 mod adam;
+pub mod config;
 pub mod metrics;
 mod views;
 
@@ -240,12 +241,17 @@ impl Optimization {
     /// The grid edits due before iteration `index`: refinement (`upsample_at`, which also restarts
     /// Adam and re-selects the grids) and redistancing (`redistance_every`).
     fn edit_grids(&mut self, index: u32) -> Result<()> {
-        let nodes: Vec<String> = self.layout.grids.iter().map(|(b, _)| b.node.clone()).collect();
+        let nodes: Vec<String> = self
+            .layout
+            .grids
+            .iter()
+            .map(|(b, _)| b.node.clone())
+            .collect();
         let upsample = self.settings.upsample_at.contains(&index);
         let redistance = self
             .settings
             .redistance_every
-            .is_some_and(|k| k > 0 && index > 0 && index % k == 0);
+            .is_some_and(|k| k > 0 && index > 0 && index.is_multiple_of(k));
         if nodes.is_empty() || !(upsample || redistance) {
             return Ok(());
         }
@@ -261,8 +267,11 @@ impl Optimization {
             self.scene.set_grid(node, data)?;
         }
         if upsample {
-            self.layout =
-                GradientLayout::select(&mut self.scene, &self.settings.params, &self.settings.grids)?;
+            self.layout = GradientLayout::select(
+                &mut self.scene,
+                &self.settings.params,
+                &self.settings.grids,
+            )?;
             self.adam = Adam::new(self.layout.entries);
         }
         Ok(())
@@ -395,7 +404,9 @@ mod tests {
     #[test]
     fn smoothness_gradient_matches_differences() {
         let dims = [5, 4, 6];
-        let values: Vec<f32> = (0..120).map(|i| ((i * 31 % 17) as f32 - 8.0) * 0.1).collect();
+        let values: Vec<f32> = (0..120)
+            .map(|i| ((i * 31 % 17) as f32 - 8.0) * 0.1)
+            .collect();
         let data = GridData::new(dims, values.clone(), "test").unwrap();
         let mut gradient = vec![0.0; 120];
         smoothness(&data, 0.7, &mut gradient);
@@ -403,11 +414,19 @@ mod tests {
             let at = |d: f32| {
                 let mut v = values.clone();
                 v[i] += d;
-                smoothness(&GridData::new(dims, v, "test").unwrap(), 0.7, &mut [0.0; 120])
+                smoothness(
+                    &GridData::new(dims, v, "test").unwrap(),
+                    0.7,
+                    &mut [0.0; 120],
+                )
             };
             let h = 1e-2;
             let fd = (at(h) - at(-h)) / (2.0 * h as f64);
-            assert!((gradient[i] - fd).abs() < 1e-4 * fd.abs().max(1.0), "{i}: {} vs {fd}", gradient[i]);
+            assert!(
+                (gradient[i] - fd).abs() < 1e-4 * fd.abs().max(1.0),
+                "{i}: {} vs {fd}",
+                gradient[i]
+            );
         }
     }
 }

@@ -80,7 +80,7 @@ pub fn parse(json: &str, base_dir: &Path) -> Result<Scene> {
 
 /// A [`Value`] read with duplicate object keys rejected (serde_json keeps the last one silently, which
 /// would hide a mistake such as two `"radius"` fields). The error carries the line and column.
-struct StrictValue(Value);
+pub(crate) struct StrictValue(pub(crate) Value);
 
 impl<'de> serde::Deserialize<'de> for StrictValue {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
@@ -184,7 +184,7 @@ struct Context<'a> {
     names: HashMap<String, String>,
 }
 
-fn join(path: &str, key: &str) -> String {
+pub(crate) fn join(path: &str, key: &str) -> String {
     if path.is_empty() {
         key.to_string()
     } else {
@@ -193,7 +193,7 @@ fn join(path: &str, key: &str) -> String {
 }
 
 /// A short description of a JSON value for error messages.
-fn describe(v: &Value) -> String {
+pub(crate) fn describe(v: &Value) -> String {
     match v {
         Value::Null => "null".into(),
         Value::Bool(b) => format!("boolean {b}"),
@@ -205,14 +205,14 @@ fn describe(v: &Value) -> String {
 }
 
 /// A JSON object being read: its path and the keys it accepts.
-struct Obj<'a> {
-    path: String,
+pub(crate) struct Obj<'a> {
+    pub(crate) path: String,
     map: &'a Map<String, Value>,
 }
 
 impl<'a> Obj<'a> {
     /// Checks that `v` is an object whose keys are all in `allowed`.
-    fn new(v: &'a Value, path: String, allowed: &[&str]) -> Result<Self> {
+    pub(crate) fn new(v: &'a Value, path: String, allowed: &[&str]) -> Result<Self> {
         let Value::Object(map) = v else {
             let at = if path.is_empty() {
                 "scene".into()
@@ -236,7 +236,7 @@ impl<'a> Obj<'a> {
     }
 
     /// Reads the string tag `key` of `v` (an object) and checks it against `types`; returns the tag.
-    fn tag(v: &'a Value, path: &str, key: &str, types: &[&str]) -> Result<&'a str> {
+    pub(crate) fn tag(v: &'a Value, path: &str, key: &str, types: &[&str]) -> Result<&'a str> {
         let Value::Object(map) = v else {
             return Err(Error::field(
                 path,
@@ -266,37 +266,37 @@ impl<'a> Obj<'a> {
         }
     }
 
-    fn at(&self, key: &str) -> String {
+    pub(crate) fn at(&self, key: &str) -> String {
         join(&self.path, key)
     }
 
-    fn get(&self, key: &str) -> Option<&'a Value> {
+    pub(crate) fn get(&self, key: &str) -> Option<&'a Value> {
         self.map.get(key)
     }
 
-    fn req(&self, key: &str) -> Result<&'a Value> {
+    pub(crate) fn req(&self, key: &str) -> Result<&'a Value> {
         self.get(key)
             .ok_or_else(|| Error::field(self.at(key), "missing"))
     }
 
-    fn f32(&self, key: &str) -> Result<f32> {
+    pub(crate) fn f32(&self, key: &str) -> Result<f32> {
         number(self.req(key)?, &self.at(key))
     }
 
-    fn opt_f32(&self, key: &str) -> Result<Option<f32>> {
+    pub(crate) fn opt_f32(&self, key: &str) -> Result<Option<f32>> {
         self.get(key).map(|v| number(v, &self.at(key))).transpose()
     }
 
-    fn vec3(&self, key: &str) -> Result<Vec3> {
+    pub(crate) fn vec3(&self, key: &str) -> Result<Vec3> {
         vec3(self.req(key)?, &self.at(key))
     }
 
-    fn opt_vec3(&self, key: &str) -> Result<Option<Vec3>> {
+    pub(crate) fn opt_vec3(&self, key: &str) -> Result<Option<Vec3>> {
         self.get(key).map(|v| vec3(v, &self.at(key))).transpose()
     }
 
     /// A non-zero vector, normalised.
-    fn direction(&self, key: &str) -> Result<Vec3> {
+    pub(crate) fn direction(&self, key: &str) -> Result<Vec3> {
         let v = self.vec3(key)?;
         v.try_normalize().ok_or_else(|| {
             Error::field(
@@ -306,7 +306,7 @@ impl<'a> Obj<'a> {
         })
     }
 
-    fn string(&self, key: &str) -> Result<&'a str> {
+    pub(crate) fn string(&self, key: &str) -> Result<&'a str> {
         let v = self.req(key)?;
         v.as_str().ok_or_else(|| {
             Error::field(
@@ -316,7 +316,7 @@ impl<'a> Obj<'a> {
         })
     }
 
-    fn opt_string(&self, key: &str) -> Result<Option<&'a str>> {
+    pub(crate) fn opt_string(&self, key: &str) -> Result<Option<&'a str>> {
         match self.get(key) {
             None => Ok(None),
             Some(_) => self.string(key).map(Some),
@@ -324,7 +324,7 @@ impl<'a> Obj<'a> {
     }
 
     /// An integer in `[min, max]`.
-    fn opt_int(&self, key: &str, min: u64, max: u64) -> Result<Option<u32>> {
+    pub(crate) fn opt_int(&self, key: &str, min: u64, max: u64) -> Result<Option<u32>> {
         let Some(v) = self.get(key) else {
             return Ok(None);
         };
@@ -340,7 +340,7 @@ impl<'a> Obj<'a> {
         }
     }
 
-    fn array(&self, key: &str) -> Result<&'a [Value]> {
+    pub(crate) fn array(&self, key: &str) -> Result<&'a [Value]> {
         let v = self.req(key)?;
         match v {
             Value::Array(a) => Ok(a),
@@ -351,7 +351,7 @@ impl<'a> Obj<'a> {
         }
     }
 
-    fn opt_array(&self, key: &str) -> Result<&'a [Value]> {
+    pub(crate) fn opt_array(&self, key: &str) -> Result<&'a [Value]> {
         match self.get(key) {
             None => Ok(&[]),
             Some(_) => self.array(key),
@@ -360,7 +360,7 @@ impl<'a> Obj<'a> {
 }
 
 /// A finite JSON number that fits an `f32`.
-fn number(v: &Value, path: &str) -> Result<f32> {
+pub(crate) fn number(v: &Value, path: &str) -> Result<f32> {
     let Value::Number(n) = v else {
         return Err(Error::field(
             path,
@@ -380,7 +380,7 @@ fn number(v: &Value, path: &str) -> Result<f32> {
     }
 }
 
-fn vec3(v: &Value, path: &str) -> Result<Vec3> {
+pub(crate) fn vec3(v: &Value, path: &str) -> Result<Vec3> {
     match v {
         Value::Array(a) if a.len() == 3 => Ok(Vec3::new(
             number(&a[0], &format!("{path}[0]"))?,

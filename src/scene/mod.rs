@@ -3,8 +3,9 @@
 
 mod grids;
 mod integrator_kind;
-mod json;
+pub(crate) mod json;
 mod params;
+pub mod patch;
 
 pub use grids::GridBlock;
 pub use integrator_kind::IntegratorKind;

@@ -57,7 +57,8 @@ impl GridData {
             level: crate::scalar::Param::new(0.0),
             selection: Default::default(),
         };
-        let h = (bbox_max - bbox_min) / glam::Vec3::new(nx as f32 - 1.0, ny as f32 - 1.0, nz as f32 - 1.0);
+        let h = (bbox_max - bbox_min)
+            / glam::Vec3::new(nx as f32 - 1.0, ny as f32 - 1.0, nz as f32 - 1.0);
         let at = |x: usize, y: usize, z: usize| {
             bbox_min + glam::Vec3::new(x as f32, y as f32, z as f32) * h
         };
@@ -84,7 +85,10 @@ impl GridData {
                             .then(|| samples[index(x + a, y + b, z + c)]);
                         let back = (x >= a && y >= b && z >= c)
                             .then(|| samples[index(x - a, y - b, z - c)]);
-                        [fwd, back].into_iter().flatten().any(|t| (t < 0.0) != (s < 0.0))
+                        [fwd, back]
+                            .into_iter()
+                            .flatten()
+                            .any(|t| (t < 0.0) != (s < 0.0))
                     });
                     if crosses {
                         let g = node.gradient(at(x, y, z)).length();
@@ -304,15 +308,23 @@ mod tests {
 
     /// A deterministic point in the box.
     fn point(k: u32, lo: glam::Vec3, hi: glam::Vec3) -> glam::Vec3 {
-        let f = |s: u32| ((k.wrapping_mul(2654435761).wrapping_add(s * 40503)) % 10007) as f32 / 10007.0;
+        let f = |s: u32| {
+            ((k.wrapping_mul(2654435761).wrapping_add(s * 40503)) % 10007) as f32 / 10007.0
+        };
         lo + (hi - lo) * glam::Vec3::new(f(1), f(2), f(3))
     }
 
     #[test]
     fn refinement_keeps_the_spline() {
-        let (lo, hi) = (glam::Vec3::new(-1.2, -1.0, -0.9), glam::Vec3::new(1.1, 1.3, 1.0));
+        let (lo, hi) = (
+            glam::Vec3::new(-1.2, -1.0, -0.9),
+            glam::Vec3::new(1.1, 1.3, 1.0),
+        );
         let blob = Sdf::smooth_union(
-            vec![Sdf::sphere([-0.3, 0.0, 0.1], 0.6), Sdf::sphere([0.4, 0.2, -0.1], 0.45)],
+            vec![
+                Sdf::sphere([-0.3, 0.0, 0.1], 0.6),
+                Sdf::sphere([0.4, 0.2, -0.1], 0.45),
+            ],
             0.3,
         );
         let coarse = bake(&blob, lo, hi, 9);
@@ -378,9 +390,18 @@ mod tests {
         // Measured: the zero set moved by 0.0018 (1.4% of a cell); the distance is off by 0.11 h
         // within two cells of the surface and by up to 9.5% of the distance farther out (first-order
         // sweeping overestimates oblique distances). Bounds: 1.5–2× those.
-        assert!(zero_shift < 0.03 * h, "zero set moved by {zero_shift} (h = {h})");
-        assert!(near_error < 0.2 * h, "error {near_error} near the surface (h = {h})");
-        assert!(far_error < 0.15, "relative error {far_error} of the distance farther out");
+        assert!(
+            zero_shift < 0.03 * h,
+            "zero set moved by {zero_shift} (h = {h})"
+        );
+        assert!(
+            near_error < 0.2 * h,
+            "error {near_error} near the surface (h = {h})"
+        );
+        assert!(
+            far_error < 0.15,
+            "relative error {far_error} of the distance farther out"
+        );
         // The gradient's length is back near 1 (it was 2), away from the centre: the distance has a
         // kink there that a C2 spline smooths (within 4 cells of it |∇φ| drops to 0.89).
         for k in 0..100 {

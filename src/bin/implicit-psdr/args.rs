@@ -70,6 +70,11 @@ pub(crate) enum Command {
     /// Central finite differences of the image with respect to one parameter, with common random numbers
     /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
     Fd(FdArgs),
+    /// Inverse rendering: optimise scene parameters and grid values so that renders from several
+    /// views match target images, as OPT.json describes (see README, "optimize"). Writes into --out:
+    /// progress.csv, loss.png, views.png (per view: target | current), NODE.npy per optimised grid and
+    /// result.json (the optimised scene).
+    Optimize(OptimizeArgs),
     /// Compare the derivative channels of two EXR files (B is the reference): relative L2 error, raw and
     /// after a 5x5 box blur, sums, sums of absolute values and correlation.
     Compare {
@@ -166,6 +171,17 @@ pub(crate) struct GradArgs {
     /// [nz, ny, nx]), `<stem>` being this file's name without `.json`: `--out runs/a.json` writes
     /// runs/a.NODE.values.npy, so runs with different names never share a grid file.
     #[arg(long, value_name = "FILE.json", default_value = "grad.json")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct OptimizeArgs {
+    /// The optimisation file (JSON, see README, "optimize"); the paths in it are relative to it.
+    #[arg(value_name = "OPT.json")]
+    pub(crate) config: PathBuf,
+    /// Output folder, created if missing. Targets rendered from a scene are cached in DIR/targets/;
+    /// a previous run's files are replaced only at the end of a successful run.
+    #[arg(long, value_name = "DIR", default_value = "optimize_out")]
     pub(crate) out: PathBuf,
 }
 

@@ -122,7 +122,7 @@ fn grid_output(out: &Path, block: &GridBlock) -> PathBuf {
 }
 
 /// The file name of `path` (as grad.json refers to the files beside it).
-fn file_name(path: &Path) -> String {
+pub(crate) fn file_name(path: &Path) -> String {
     let name = path.file_name().unwrap_or(path.as_os_str());
     name.to_string_lossy().into_owned()
 }
@@ -194,11 +194,11 @@ fn temporary(path: &Path) -> PathBuf {
 }
 
 /// Writes a file to the path given, or says why not (one line, without the path).
-type Writer = Box<dyn FnOnce(&Path) -> Result<(), String>>;
+pub(crate) type Writer = Box<dyn FnOnce(&Path) -> Result<(), String>>;
 
 /// Writes every file of `files` (`(path, writer)`) to a temporary name, then renames them all; on any
 /// failure removes what it wrote, so either every file is written or none.
-fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
+pub(crate) fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
     let mut temporaries = Vec::new();
     let mut renamed = Vec::new();
     let mut result = Ok(());

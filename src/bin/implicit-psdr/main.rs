@@ -7,6 +7,7 @@
 
 mod args;
 mod grad;
+mod optimize;
 
 use anyhow::{Context, Result};
 use args::{BakeArgs, Cli, Command, DiffArgs, EstimatorArgs, FdArgs, OutputArgs, SceneArgs};
@@ -72,6 +73,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Diff(args) => diff(&args),
         Command::Grad(args) => grad::grad(&args),
         Command::Fd(args) => finite_difference(&args),
+        Command::Optimize(args) => optimize::optimize(&args),
         Command::Compare { a, b, channel } => {
             let rows = compare::compare_files(&a, &b, channel.as_deref())?;
             print!("{}", compare::format_table(&a, &b, &rows));
