@@ -92,7 +92,12 @@ fn png_size(path: &Path) -> (u32, u32) {
 fn progress(path: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("iteration,loss,seconds,gradient_norm"));
+    let header = lines.next().unwrap();
+    assert!(
+        header == "iteration,loss,seconds,gradient_norm"
+            || header == "iteration,loss,seconds,gradient_norm,iou,chamfer",
+        "{header}"
+    );
     lines
         .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect())
         .collect()
@@ -297,6 +302,30 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
         &out,
         &["render", "result.json", "--out", "r.exr", "--png", "r.png"],
     ));
+
+    // A target scene that holds a shape named `blob` too: IoU and Chamfer columns.
+    let mut target = start.clone();
+    target["shapes"][0]["sdf"] = json!({"type": "sphere", "center": [0, 0, 0], "radius": 0.6});
+    target["shapes"][1]["sdf"]["file"] = json!("scenes/fixed.npy");
+    write_json(&dir.join("blob_target.json"), &target);
+    let mut with_shape = plain.clone();
+    with_shape["target"] = json!({"scene": "blob_target.json"});
+    write_json(&dir.join("with_shape.json"), &with_shape);
+    assert_success(&run(
+        &dir,
+        &["optimize", "with_shape.json", "--out", "shape"],
+    ));
+    let text = std::fs::read_to_string(dir.join("shape/progress.csv")).unwrap();
+    assert!(
+        text.starts_with("iteration,loss,seconds,gradient_norm,iou,chamfer\n"),
+        "{text}"
+    );
+    let row = &progress(&dir.join("shape/progress.csv"))[0];
+    // The 8³ grid samples a sphere of radius 0.55, which its spline shrinks by about h²/(3r) to
+    // about 0.50 (h = 2/7); against the target's 0.6 that is an IoU near (0.5/0.6)³ = 0.58 and a
+    // Chamfer distance near 0.1 (measured after one step: 0.575).
+    assert!(row[4] > 0.45 && row[4] < 0.7, "IoU {}", row[4]);
+    assert!(row[5] > 0.05 && row[5] < 0.15, "Chamfer {}", row[5]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -160,6 +160,17 @@ impl Optimization {
         Ok(out)
     }
 
+    /// The names of the shapes whose grids are optimised, in layout order, each once.
+    pub fn grid_shapes(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for (block, _) in &self.layout.grids {
+            if !out.contains(&block.shape_name) {
+                out.push(block.shape_name.clone());
+            }
+        }
+        out
+    }
+
     /// The views of iteration `index`: all, or `views_per_iteration` of them drawn from the seed.
     pub fn views_of(&self, index: u32) -> Vec<usize> {
         let n = self.views.len();

@@ -13,6 +13,8 @@ use std::sync::Arc;
 /// One grid node's values as a parameter block.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridBlock {
+    /// The shape the node belongs to.
+    pub shape_name: String,
     /// The node's prefix (`blob`): what `--grid` and `--grid-direction` take.
     pub node: String,
     /// The block's name, `<node>.values`.
@@ -95,6 +97,7 @@ impl Scene {
                 &mut |node, data, _, _| {
                     let [nx, ny, nz] = data.dims;
                     out.push(GridBlock {
+                        shape_name: shape.name.clone(),
                         node: node.to_string(),
                         name: format!("{node}.values"),
                         shape: [nz, ny, nx],

@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use implicit_psdr::film::{self, Image, colormap};
 use implicit_psdr::integrator::{self, RenderOptions};
 use implicit_psdr::optimize::config::{OptimizeConfig, Target};
-use implicit_psdr::optimize::{Iteration, Optimization, View};
+use implicit_psdr::optimize::{Iteration, Optimization, View, metrics};
 use implicit_psdr::scene::{Scene, patch};
 use implicit_psdr::sdf;
 use std::io::{IsTerminal, Write as _};
@@ -76,7 +76,25 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
         .with_context(|| format!("{}: cannot write", partial.display()))?;
     let mut csv = std::io::BufWriter::new(file);
     let csv_error = |e: std::io::Error| anyhow::anyhow!("{}: cannot write: {e}", partial.display());
-    writeln!(csv, "iteration,loss,seconds,gradient_norm").map_err(csv_error)?;
+    // Shape quality columns: the optimised grids' shapes that the target scene also holds.
+    let reference = match &cfg.target {
+        Target::Scene { scene, .. } => Some(scene),
+        Target::Images { .. } => None,
+    };
+    let compared: Vec<String> = reference.map_or_else(Vec::new, |r| {
+        (opt.grid_shapes().into_iter())
+            .filter(|name| r.shape_named(name).is_ok())
+            .collect()
+    });
+    let mut header = "iteration,loss,seconds,gradient_norm".to_string();
+    for name in &compared {
+        if compared.len() == 1 {
+            header += ",iou,chamfer";
+        } else {
+            header += &format!(",iou.{name},chamfer.{name}");
+        }
+    }
+    writeln!(csv, "{header}").map_err(csv_error)?;
     csv.flush().map_err(csv_error)?;
 
     let iterations = settings.iterations;
@@ -91,10 +109,21 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
             ..
         } = opt.step().map_err(in_config)?;
         let seconds = start.elapsed().as_secs_f64();
-        writeln!(csv, "{index},{loss},{seconds},{gradient_norm}").map_err(csv_error)?;
+        let mut row = format!("{index},{loss},{seconds},{gradient_norm}");
+        let mut iou = None;
+        for name in &compared {
+            let quality = match reference {
+                Some(r) => metrics::shape_quality(&opt.scene, r, name).map_err(in_config)?,
+                None => None,
+            };
+            let (i, c) = quality.unwrap_or((f64::NAN, f64::NAN));
+            iou.get_or_insert(i);
+            row += &format!(",{i},{c}");
+        }
+        writeln!(csv, "{row}").map_err(csv_error)?;
         csv.flush().map_err(csv_error)?;
         losses.push(loss);
-        bar.update(opt.done, loss);
+        bar.update(opt.done, loss, iou);
         if let Some(every) = cfg.snapshot_every
             && opt.done.is_multiple_of(every)
             && opt.done < iterations
@@ -181,7 +210,7 @@ fn count(n: usize, word: &str) -> String {
     format!("{n} {word}{}", if n == 1 { "" } else { "s" })
 }
 
-/// A progress bar over the iterations, with the last loss, on stderr when it is a terminal.
+/// A progress bar over the iterations, with the last loss (and IoU), on stderr when it is a terminal.
 struct IterationBar(Option<indicatif::ProgressBar>);
 
 impl IterationBar {
@@ -199,10 +228,12 @@ impl IterationBar {
         Self(Some(bar))
     }
 
-    fn update(&self, done: u32, loss: f64) {
+    /// Shows iteration `done`'s loss and, when the target shape is known, its IoU.
+    fn update(&self, done: u32, loss: f64, iou: Option<f64>) {
         if let Some(bar) = &self.0 {
             bar.set_position(done as u64);
-            bar.set_message(format!("loss {loss:.4e}"));
+            let iou = iou.map_or(String::new(), |i| format!(" IoU {i:.3}"));
+            bar.set_message(format!("loss {loss:.4e}{iou}"));
         }
     }
 
