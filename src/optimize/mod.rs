@@ -273,7 +273,8 @@ impl Optimization {
             }
             if redistance {
                 let [lo, hi] = self.scene.grid_box(node)?;
-                data = data.redistanced(lo, hi);
+                let level = self.scene.parameter(&format!("{node}.level"))?;
+                data = data.redistanced(lo, hi, level);
             }
             self.scene.set_grid(node, data)?;
         }

@@ -45,16 +45,16 @@ impl GridData {
         data
     }
 
-    /// Control points whose spline is the signed distance to the zero set of this grid's spline over
-    /// the box `[bbox_min, bbox_max]` (module docs). A grid without a sign change becomes `±` the
-    /// distance to nothing: its values are kept.
-    pub fn redistanced(&self, bbox_min: glam::Vec3, bbox_max: glam::Vec3) -> GridData {
+    /// Control points whose spline minus `level` is the signed distance to the zero set of this grid's
+    /// spline minus `level` (the grid node's iso-level) over the box `[bbox_min, bbox_max]` (module
+    /// docs). A grid without a sign change keeps its values.
+    pub fn redistanced(&self, bbox_min: glam::Vec3, bbox_max: glam::Vec3, level: f32) -> GridData {
         let [nx, ny, nz] = self.dims;
         let node = Sdf::Grid {
             data: Arc::new(self.clone()),
             bbox_min,
             bbox_max,
-            level: crate::scalar::Param::new(0.0),
+            level: crate::scalar::Param::new(level),
             selection: Default::default(),
         };
         let h = (bbox_max - bbox_min)
@@ -110,10 +110,10 @@ impl GridData {
                 *v = -*v;
             }
         }
-        // Control points that interpolate the distances.
+        // Control points that interpolate the distances (plus the level, which the node subtracts).
         let mut data = GridData {
             dims: self.dims,
-            values: d,
+            values: d.into_iter().map(|v| v + level).collect(),
         };
         for axis in 0..3 {
             data = data.map_lines(axis, data.dims[axis], interpolating_control_points);
@@ -360,7 +360,7 @@ mod tests {
             *v *= 2.0;
         }
         let before = grid_node(doubled.clone(), lo, hi);
-        let after = grid_node(doubled.redistanced(lo, hi), lo, hi);
+        let after = grid_node(doubled.redistanced(lo, hi, 0.0), lo, hi);
         let h = 3.0 / 23.0;
         let centre = glam::Vec3::new(0.1, -0.05, 0.0);
         let (mut zero_shift, mut near_error, mut far_error) = (0.0f32, 0.0f32, 0.0f32);
@@ -409,6 +409,36 @@ mod tests {
             if (p - centre).length() > 4.0 * h {
                 let g = after.gradient(p).length();
                 assert!((g - 1.0).abs() < 0.1, "|∇φ| = {g} at {p}");
+            }
+        }
+    }
+
+    /// With an iso-level, the node's function (spline − level) becomes the distance, and its zero set
+    /// stays: the same sphere as a grid of `distance + 0.3` at level 0.3.
+    #[test]
+    fn redistancing_respects_the_level() {
+        let (lo, hi) = (glam::Vec3::splat(-1.5), glam::Vec3::splat(1.5));
+        let sphere = Sdf::sphere([0.0; 3], 0.8);
+        let mut shifted = bake(&sphere, lo, hi, 20);
+        for v in &mut shifted.values {
+            *v = 2.0 * *v + 0.3;
+        }
+        let with_level = |data: GridData| {
+            let mut node = grid_node(data, lo, hi);
+            if let Sdf::Grid { level, .. } = &mut node {
+                level.value = 0.3;
+            }
+            node
+        };
+        let before = with_level(shifted.clone());
+        let after = with_level(shifted.redistanced(lo, hi, 0.3));
+        for k in 0..50 {
+            let p = point(k, lo + 0.3, hi - 0.3);
+            let (b, a) = (before.eval_f32(p), after.eval_f32(p));
+            // Same sign (the zero set stays), half the value (the factor 2 is gone) away from it.
+            assert_eq!(a < 0.0, b < 0.0, "at {p}: {a} vs {b}");
+            if b.abs() > 0.1 {
+                assert!((a - 0.5 * b).abs() < 0.1 * b.abs(), "at {p}: {a} vs {b}/2");
             }
         }
     }
