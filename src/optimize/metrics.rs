@@ -55,8 +55,11 @@ fn surface_points(
 }
 
 /// The symmetric Chamfer distance between the surfaces of `a` and `b`: half the sum of the
-/// area-weighted mean distance from points of each surface to the nearest point sampled on the other
-/// (`lines` area-sampling lines per surface, seed `seed`). Infinite if either surface yields no point.
+/// area-weighted mean distance from points of each surface to the other surface (`lines`
+/// area-sampling lines per surface, seed `seed`). The distance from `p` to the other surface is taken
+/// as `|φ(p)| / |∇φ(p)|`, its first-order estimate (exact for a signed distance), rather than to the
+/// nearest of finitely many sampled points, whose spacing would put a floor under the measure.
+/// Infinite if either surface yields no point.
 pub fn chamfer(
     a: &Shape,
     b: &Shape,
@@ -71,19 +74,17 @@ pub fn chamfer(
     if pa.is_empty() || pb.is_empty() {
         return Ok(f64::INFINITY);
     }
-    let one_way = |from: &[(glam::Vec3, f64)], to: &[(glam::Vec3, f64)]| {
+    let one_way = |from: &[(glam::Vec3, f64)], to: &Shape| {
         let (mut sum, mut weight) = (0.0, 0.0);
         for &(p, w) in from {
-            let nearest = to
-                .iter()
-                .map(|(q, _)| p.distance_squared(*q))
-                .fold(f32::INFINITY, f32::min);
-            sum += w * (nearest as f64).sqrt();
+            let g = to.gradient(p).length();
+            let d = to.eval_f32(p).abs() / if g > 1e-6 { g } else { 1.0 };
+            sum += w * d as f64;
             weight += w;
         }
         sum / weight
     };
-    Ok(0.5 * (one_way(&pa, &pb) + one_way(&pb, &pa)))
+    Ok(0.5 * (one_way(&pa, b) + one_way(&pb, a)))
 }
 
 /// How close shape `name` of `current` is to the shape of the same name in `reference`: `(IoU,
@@ -137,9 +138,18 @@ mod tests {
         let (a, b) = (ball([0.0; 3], 1.0), ball([0.0; 3], 1.2));
         let settings = TraceSettings::default();
         let got = chamfer(&a, &b, &settings, 2000, 1).unwrap();
-        // Every point of one sphere is 0.2 from the other; sampled nearest points add a little.
-        assert!((got - 0.2).abs() < 0.01, "{got}");
+        // Every point of one sphere is 0.2 from the other (to the points' own rounding).
+        assert!((got - 0.2).abs() < 1e-4, "{got}");
         let same = chamfer(&a, &a, &settings, 2000, 1).unwrap();
-        assert!(same < 0.05, "{same}");
+        assert!(same < 1e-5, "{same}");
+        // Off-centre: the mean distance between the surfaces of two unit balls 0.3 apart is
+        // between 0 and 0.3, and symmetric.
+        let c = ball([0.3, 0.0, 0.0], 1.0);
+        let (ac, ca) = (
+            chamfer(&a, &c, &settings, 2000, 1).unwrap(),
+            chamfer(&c, &a, &settings, 2000, 1).unwrap(),
+        );
+        assert!(ac > 0.1 && ac < 0.3, "{ac}");
+        assert!((ac - ca).abs() < 0.01, "{ac} vs {ca}");
     }
 }
