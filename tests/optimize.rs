@@ -182,3 +182,17 @@ fn a_grid_moves_towards_the_target_shape_only_with_the_boundary_terms() {
         "IoU complete {after}, interior alone {interior_after}"
     );
 }
+
+/// The examples in `scenes/inverse/` stay loadable: their OPT.json, both scenes and the grids they name.
+#[test]
+fn inverse_examples_load() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let opt = entry.unwrap().path().join("opt.json");
+        implicit_psdr::optimize::config::OptimizeConfig::load(&opt)
+            .unwrap_or_else(|e| panic!("{}: {e}", opt.display()));
+        count += 1;
+    }
+    assert!(count >= 3, "{count} examples");
+}
