@@ -5,23 +5,12 @@
 use implicit_psdr::film;
 mod common;
 
-use common::{assert_failure, outputs, run};
+use common::{assert_failure, assert_success, outputs, run};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 /// A fresh, empty working folder for one test.
 fn workdir(name: &str) -> PathBuf {
     common::workdir("cli-diff", name)
-}
-
-#[track_caller]
-fn assert_success(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// The default scene (`scenes/sphere_floor.json`) at 16×16 pixels, 4 spp, with `edit` applied, written

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{Rng, assert_failure, npy_bytes, outputs, run};
+use common::{Rng, assert_failure, assert_success, npy_bytes, outputs, run};
 use implicit_psdr::film::{self, Image};
 use implicit_psdr::integrator::{
     self, DiffOptions, GradientLayout, Loss, Normalization, RenderOptions, loss_gradient,
@@ -15,7 +15,6 @@ use implicit_psdr::scalar::GridValues;
 use implicit_psdr::scene;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Output;
 use std::sync::Arc;
 
 /// The grid's `.npy` shape `[nz, ny, nx]`: three different sizes, so that a transposed shape shows.
@@ -27,16 +26,6 @@ const INPUTS: [&str; 3] = ["scene.json", "g.npy", "t.exr"];
 
 fn workdir(name: &str) -> PathBuf {
     common::workdir("cli-grad", name)
-}
-
-#[track_caller]
-fn assert_success(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// A float32 `.npy` of shape `shape` holding `values`.

@@ -6,12 +6,11 @@
 
 mod common;
 
-use common::{assert_failure, npy_bytes, run};
+use common::{assert_failure, assert_success, npy_bytes, run};
 use implicit_psdr::film::{self, Image};
 use implicit_psdr::scene;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 /// The image size of the test scenes.
 const SIZE: u32 = 16;
@@ -21,16 +20,6 @@ const TRUTH: f32 = 0.9;
 
 fn workdir(name: &str) -> PathBuf {
     common::workdir("cli-optimize", name)
-}
-
-#[track_caller]
-fn assert_success(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// A ball under a rectangle light and a dim sky, 16×16.

@@ -26,6 +26,17 @@ pub fn run(dir: &Path, args: &[&str]) -> Output {
         .expect("run implicit-psdr")
 }
 
+/// A successful run: its stdout (the failure message shows stderr).
+#[track_caller]
+pub fn assert_success(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// A clean failure: exit code 2 and exactly one line `error: ...` on stderr mentioning `expected`.
 #[track_caller]
 pub fn assert_failure(out: &Output, expected: &str) {
