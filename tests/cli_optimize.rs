@@ -82,9 +82,11 @@ fn progress(path: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap();
+    let timing =
+        ",loss_pass_seconds,interior_seconds,primary_seconds,secondary_seconds,grid_edit_seconds";
     assert!(
-        header == "iteration,loss,seconds,gradient_norm"
-            || header == "iteration,loss,seconds,gradient_norm,iou,chamfer",
+        header == format!("iteration,loss,seconds,gradient_norm{timing}")
+            || header == format!("iteration,loss,seconds,gradient_norm,iou,chamfer{timing}"),
         "{header}"
     );
     lines
@@ -135,7 +137,16 @@ fn tiny_run_writes_every_output_and_moves_the_parameter() {
     let rows = progress(&out.join("progress.csv"));
     assert_eq!(rows.len(), 5);
     for (i, row) in rows.iter().enumerate() {
-        assert_eq!(row.len(), 4);
+        // The four columns, then the five stages' seconds (no shape columns: the target has no grid).
+        assert_eq!(row.len(), 9);
+        assert!(
+            row[4..].iter().all(|t| t.is_finite() && *t >= 0.0),
+            "{row:?}"
+        );
+        assert!(
+            row[4..].iter().sum::<f64>() <= row[2] + 1e-3,
+            "stages exceed the time: {row:?}"
+        );
         assert_eq!(row[0], i as f64);
         assert!(row[1].is_finite() && row[1] > 0.0, "loss {row:?}");
         assert!(row[2] > 0.0 && row[3].is_finite(), "{row:?}");
@@ -306,7 +317,7 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
     ));
     let text = std::fs::read_to_string(dir.join("shape/progress.csv")).unwrap();
     assert!(
-        text.starts_with("iteration,loss,seconds,gradient_norm,iou,chamfer\n"),
+        text.starts_with("iteration,loss,seconds,gradient_norm,iou,chamfer,"),
         "{text}"
     );
     let row = &progress(&dir.join("shape/progress.csv"))[0];

@@ -79,6 +79,24 @@ pub struct Iteration {
     pub seconds: f64,
     /// Samples whose gradient was dropped as non-finite.
     pub invalid_samples: u64,
+    /// Where the time went, summed over the views: the loss passes, the adjoint passes' interior,
+    /// primary and secondary terms, and the grid edits (refinement, redistancing), in seconds.
+    pub stage_seconds: StageSeconds,
+}
+
+/// Seconds of an iteration by stage (see [`Iteration::stage_seconds`]).
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct StageSeconds {
+    /// Loss passes (the image of each view and its loss).
+    pub loss_pass: f64,
+    /// The adjoint passes' interior term.
+    pub interior: f64,
+    /// The adjoint passes' primary boundary term.
+    pub primary: f64,
+    /// The adjoint passes' secondary boundary term.
+    pub secondary: f64,
+    /// Grid refinement and redistancing before the iteration.
+    pub grid_edits: f64,
 }
 
 /// An optimisation in progress: the scene, its views and their targets, and Adam's state.
@@ -194,7 +212,9 @@ impl Optimization {
     pub fn step(&mut self) -> Result<Iteration> {
         let start = std::time::Instant::now();
         let index = self.done;
+        let mut stages = StageSeconds::default();
         self.edit_grids(index)?;
+        stages.grid_edits = start.elapsed().as_secs_f64();
         let views = self.views_of(index);
         let mut gradient = vec![0.0f64; self.layout.entries];
         let mut loss = 0.0;
@@ -211,6 +231,11 @@ impl Optimization {
             )?;
             loss += g.loss;
             invalid += g.gradient.stats.invalid_derivatives;
+            stages.loss_pass += g.loss_seconds;
+            let [interior, primary, secondary] = g.gradient.term_seconds;
+            stages.interior += interior;
+            stages.primary += primary;
+            stages.secondary += secondary;
             for (t, d) in gradient.iter_mut().zip(g.gradient.total()) {
                 *t += d;
             }
@@ -246,6 +271,7 @@ impl Optimization {
             gradient_norm: norm,
             seconds: start.elapsed().as_secs_f64(),
             invalid_samples: invalid,
+            stage_seconds: stages,
         })
     }
 

@@ -94,6 +94,8 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
             header += &format!(",iou.{name},chamfer.{name}");
         }
     }
+    header +=
+        ",loss_pass_seconds,interior_seconds,primary_seconds,secondary_seconds,grid_edit_seconds";
     writeln!(csv, "{header}").map_err(csv_error)?;
     csv.flush().map_err(csv_error)?;
 
@@ -106,6 +108,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
             index,
             loss,
             gradient_norm,
+            stage_seconds: t,
             ..
         } = opt.step().map_err(in_config)?;
         let seconds = start.elapsed().as_secs_f64();
@@ -120,6 +123,10 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
             iou.get_or_insert(i);
             row += &format!(",{i},{c}");
         }
+        row += &format!(
+            ",{},{},{},{},{}",
+            t.loss_pass, t.interior, t.primary, t.secondary, t.grid_edits
+        );
         writeln!(csv, "{row}").map_err(csv_error)?;
         csv.flush().map_err(csv_error)?;
         losses.push(loss);

@@ -105,6 +105,8 @@ pub struct Gradient {
     pub secondary: Vec<f64>,
     /// Counters (`invalid_derivatives`: samples whose gradient was not finite, dropped).
     pub stats: RenderStats,
+    /// Wall-clock seconds of the interior, primary and secondary terms.
+    pub term_seconds: [f64; 3],
 }
 
 impl Gradient {
@@ -178,8 +180,14 @@ pub fn render_gradient_with_image(
     let mut stats = RenderStats::default();
     let film = |scale: f32| AdjointFilm::new(adjoint, image, norm, scale, n);
     let mut invalid = 0;
+    let clock = std::time::Instant::now();
+    let mut term_seconds = [0.0; 3];
+    let mut lap = |term: usize| {
+        term_seconds[term] = clock.elapsed().as_secs_f64() - term_seconds.iter().sum::<f64>();
+    };
     let mut interior_film = film(1.0 / spp as f32);
     let s = interior::pass::<Rev, _>(scene, 0, options, &mut interior_film);
+    lap(0);
     stats.absorb(s);
     invalid += interior_film.invalid;
     let (n_primary, n_secondary) = options.boundary.totals(scene, spp);
@@ -206,6 +214,7 @@ pub fn render_gradient_with_image(
             add(&mut primary, &f.gradient);
         }
     }
+    lap(1);
     let mut secondary = vec![0.0; n];
     if n_secondary > 0 {
         let mut f = film(1.0 / n_secondary as f32);
@@ -221,6 +230,7 @@ pub fn render_gradient_with_image(
         invalid += f.invalid;
         secondary = f.gradient;
     }
+    lap(2);
     stats.invalid_derivatives += invalid;
     if invalid > 0 && stats.first_invalid.is_none() {
         stats.first_invalid = Some(format!(
@@ -234,6 +244,7 @@ pub fn render_gradient_with_image(
         primary,
         secondary,
         stats,
+        term_seconds,
     })
 }
 
@@ -253,6 +264,8 @@ pub struct LossGradient {
     pub image: Image,
     /// The gradient of the loss, from the adjoint pass (seed `seed + 1`).
     pub gradient: Gradient,
+    /// Wall-clock seconds of the loss pass.
+    pub loss_seconds: f64,
 }
 
 /// The seed of the adjoint pass for a loss pass of seed `seed` (module docs, "Two seeds").
@@ -274,6 +287,7 @@ pub fn loss_gradient(
     let start = std::time::Instant::now();
     let (image, loss_stats) = render(scene, &options.render);
     let (value, adjoint) = loss.evaluate(&image, target, "--target")?;
+    let loss_seconds = start.elapsed().as_secs_f64();
     let adjoint_options = DiffOptions {
         render: RenderOptions {
             seed: adjoint_seed(options.render.seed),
@@ -289,5 +303,6 @@ pub fn loss_gradient(
         loss: value,
         image,
         gradient,
+        loss_seconds,
     })
 }
