@@ -196,6 +196,19 @@ fn temporary(path: &Path) -> PathBuf {
 /// Writes a file to the path given, or says why not (one line, without the path).
 pub(crate) type Writer = Box<dyn FnOnce(&Path) -> Result<(), String>>;
 
+/// A writer's message for a library error: a file error's own message (the caller names the file).
+pub(crate) fn file_message(e: implicit_psdr::Error) -> String {
+    match e {
+        implicit_psdr::Error::File { message, .. } => message,
+        e => e.to_string(),
+    }
+}
+
+/// The [`Writer`] of a grid as a float32 `.npy`.
+pub(crate) fn npy_writer(grid: impl std::borrow::Borrow<GridData> + 'static) -> Writer {
+    Box::new(move |tmp| sdf::write_npy(tmp, grid.borrow()).map_err(file_message))
+}
+
 /// Writes every file of `files` (`(path, writer)`) to a temporary name, then renames them all; on any
 /// failure removes what it wrote, so either every file is written or none.
 pub(crate) fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
@@ -286,15 +299,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         let [nz, ny, nx] = block.shape;
         let what = format!("the gradient of {}", block.name);
         let grid = GridData::new([nx, ny, nz], values, &what)?;
-        files.push((
-            path.clone(),
-            Box::new(move |tmp| {
-                sdf::write_npy(tmp, &grid).map_err(|e| match e {
-                    implicit_psdr::Error::File { message, .. } => message,
-                    e => e.to_string(),
-                })
-            }),
-        ));
+        files.push((path.clone(), npy_writer(grid)));
     }
     files.push((
         out.clone(),

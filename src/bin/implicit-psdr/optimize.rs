@@ -8,7 +8,7 @@
 //! (every final file is written to a temporary name first, then all are renamed).
 
 use crate::args::OptimizeArgs;
-use crate::grad::{Writer, file_name, write_all_or_nothing};
+use crate::grad::{Writer, file_message, file_name, npy_writer, write_all_or_nothing};
 use crate::progress_bar;
 use anyhow::{Context, Result, bail};
 use implicit_psdr::film::{self, Image, colormap};
@@ -16,7 +16,6 @@ use implicit_psdr::integrator::{self, RenderOptions};
 use implicit_psdr::optimize::config::{OptimizeConfig, Target};
 use implicit_psdr::optimize::{Iteration, Optimization, View, metrics};
 use implicit_psdr::scene::{Scene, patch};
-use implicit_psdr::sdf;
 use std::io::{IsTerminal, Write as _};
 use std::path::{Component, Path, PathBuf};
 
@@ -155,15 +154,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
     files.push((out.join("loss.png"), png_writer(plot)));
     for (node, path) in &grid_outputs {
         let grid = opt.scene.grid_values(node).map_err(in_config)?;
-        files.push((
-            path.clone(),
-            Box::new(move |tmp| {
-                sdf::write_npy(tmp, &grid).map_err(|e| match e {
-                    implicit_psdr::Error::File { message, .. } => message,
-                    e => e.to_string(),
-                })
-            }),
-        ));
+        files.push((path.clone(), npy_writer(grid)));
     }
     files.push((
         out.join("result.json"),
@@ -394,10 +385,7 @@ fn views_picture(opt: &Optimization, spp: u32, seed: u64) -> implicit_psdr::Resu
 /// A writer of a PNG of `image`.
 fn png_writer(image: Image) -> Writer {
     Box::new(move |tmp| {
-        film::write_png(tmp, image.width, image.height, &image.rgb).map_err(|e| match e {
-            implicit_psdr::Error::File { message, .. } => message,
-            e => e.to_string(),
-        })
+        film::write_png(tmp, image.width, image.height, &image.rgb).map_err(file_message)
     })
 }
 
