@@ -326,6 +326,8 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
     // Chamfer distance near 0.1 (measured after one step: 0.575).
     assert!(row[4] > 0.45 && row[4] < 0.7, "IoU {}", row[4]);
     assert!(row[5] > 0.05 && row[5] < 0.15, "Chamfer {}", row[5]);
+    // loss.png gains the IoU panel below the loss.
+    assert_eq!(png_size(&dir.join("shape/loss.png")), (640, 600));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

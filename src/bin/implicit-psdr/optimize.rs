@@ -26,7 +26,7 @@ const TARGET_SEED: u64 = 0x7A46_E700_0000;
 const PREVIEW_SEED: u64 = 0x5EE0_0000_0000;
 /// The cache key of rendered targets, beside them.
 const TARGET_KEY: &str = "targets.json";
-/// Size of `loss.png`.
+/// Size of `loss.png`'s loss panel (an IoU panel below it adds half the height).
 const PLOT_SIZE: (u32, u32) = (640, 400);
 
 pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
@@ -102,6 +102,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
     let bar = IterationBar::new(iterations);
     let start = std::time::Instant::now();
     let mut losses = Vec::with_capacity(iterations as usize);
+    let mut ious = Vec::with_capacity(iterations as usize);
     for _ in 0..iterations {
         let Iteration {
             index,
@@ -129,6 +130,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
         writeln!(csv, "{row}").map_err(csv_error)?;
         csv.flush().map_err(csv_error)?;
         losses.push(loss);
+        ious.push(iou.unwrap_or(f64::NAN));
         bar.update(opt.done, loss, iou);
         if let Some(every) = cfg.snapshot_every
             && opt.done.is_multiple_of(every)
@@ -147,7 +149,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
 
     // The final files, all or nothing.
     let picture = views_picture(&opt, settings.spp, settings.seed).map_err(in_config)?;
-    let plot = loss_plot(&losses)?;
+    let plot = loss_plot(&losses, &ious)?;
     let result = result_json(&cfg, &opt.scene, out, &grid_outputs)?;
     let mut files: Vec<(PathBuf, Writer)> = Vec::new();
     files.push((out.join("views.png"), png_writer(picture)));
@@ -389,30 +391,38 @@ fn png_writer(image: Image) -> Writer {
     })
 }
 
-/// The loss against the iteration, the loss on a log scale, with light grey lines at the powers of ten
-/// and every tenth of the iterations (no text: the numbers are in progress.csv). Non-finite and zero
-/// losses are left out.
-fn loss_plot(losses: &[f64]) -> Result<Image> {
+/// The loss against the iteration on a log scale, with light grey lines at the powers of ten and every
+/// tenth of the iterations; below it, when `ious` holds finite values, the IoU on `[0, 1]` with grey lines
+/// every 0.1 (no text: the numbers are in progress.csv). Non-finite and zero losses are left out.
+fn loss_plot(losses: &[f64], ious: &[f64]) -> Result<Image> {
     use plotters::prelude::*;
     let (w, h) = PLOT_SIZE;
+    let with_iou = ious.iter().any(|v| v.is_finite());
+    let h = if with_iou { h + h / 2 } else { h };
     let mut buffer = vec![255u8; 3 * (w * h) as usize];
     let points: Vec<(f64, f64)> = (losses.iter().enumerate())
         .filter(|(_, l)| l.is_finite() && **l > 0.0)
         .map(|(i, l)| (i as f64, *l))
         .collect();
-    if !points.is_empty() {
-        let mut draw = || -> Result<(), Box<dyn std::error::Error + '_>> {
-            let root = BitMapBackend::with_buffer(&mut buffer, (w, h)).into_drawing_area();
-            root.fill(&WHITE)?;
+    let iou_points: Vec<(f64, f64)> = (ious.iter().enumerate())
+        .filter(|(_, v)| v.is_finite())
+        .map(|(i, v)| (i as f64, *v))
+        .collect();
+    let last = (losses.len().max(1) - 1).max(1) as f64;
+    let grey = RGBColor(215, 215, 215);
+    let mut draw = || -> Result<(), Box<dyn std::error::Error + '_>> {
+        let root = BitMapBackend::with_buffer(&mut buffer, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (top, bottom) = root.split_vertically(PLOT_SIZE.1);
+        let frame = |lo: f64, hi: f64| [(0.0, lo), (last, lo), (last, hi), (0.0, hi), (0.0, lo)];
+        if !points.is_empty() {
             let lo = points.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
             let hi = points.iter().map(|p| p.1).fold(0.0, f64::max);
             // At least a factor of 2 above and below, so a flat curve sits in the middle.
             let (lo, hi) = (lo.min(hi / 2.0), hi.max(lo * 2.0));
-            let last = (losses.len() - 1).max(1) as f64;
-            let mut chart = ChartBuilder::on(&root)
+            let mut chart = ChartBuilder::on(&top)
                 .margin(16)
                 .build_cartesian_2d(0.0..last, (lo..hi).log_scale())?;
-            let grey = RGBColor(215, 215, 215);
             let (e0, e1) = (lo.log10().ceil() as i32, hi.log10().floor() as i32);
             for e in e0..=e1 {
                 let y = 10f64.powi(e);
@@ -422,14 +432,26 @@ fn loss_plot(losses: &[f64]) -> Result<Image> {
                 let x = last * i as f64 / 10.0;
                 chart.draw_series(LineSeries::new([(x, lo), (x, hi)], grey))?;
             }
-            let frame = [(0.0, lo), (last, lo), (last, hi), (0.0, hi), (0.0, lo)];
-            chart.draw_series(LineSeries::new(frame, BLACK))?;
+            chart.draw_series(LineSeries::new(frame(lo, hi), BLACK))?;
             chart.draw_series(LineSeries::new(points.clone(), BLUE.stroke_width(2)))?;
-            root.present()?;
-            Ok(())
-        };
-        draw().map_err(|e| anyhow::anyhow!("loss.png: cannot draw the plot: {e}"))?;
-    }
+        }
+        if with_iou {
+            let mut chart = ChartBuilder::on(&bottom)
+                .margin(16)
+                .build_cartesian_2d(0.0..last, 0.0..1.0)?;
+            for i in 0..=10 {
+                let (x, y) = (last * i as f64 / 10.0, i as f64 / 10.0);
+                chart.draw_series(LineSeries::new([(x, 0.0), (x, 1.0)], grey))?;
+                chart.draw_series(LineSeries::new([(0.0, y), (last, y)], grey))?;
+            }
+            chart.draw_series(LineSeries::new(frame(0.0, 1.0), BLACK))?;
+            let green = RGBColor(0, 140, 60);
+            chart.draw_series(LineSeries::new(iou_points.clone(), green.stroke_width(2)))?;
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| anyhow::anyhow!("loss.png: cannot draw the plot: {e}"))?;
     let mut image = Image::new(w, h);
     for (v, b) in image.rgb.iter_mut().zip(&buffer) {
         *v = colormap::srgb_decode(*b as f32 / 255.0);
