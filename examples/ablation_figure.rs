@@ -145,7 +145,7 @@ fn draw<'a>(
             * 1.05;
         let mut chamfer = ChartBuilder::on(&cells[2 * k + 1])
             .caption(
-                format!("{}: Chamfer distance, % of the box diagonal", row.title),
+                format!("{}: Chamfer, % of box diagonal", row.title),
                 ("sans-serif", 18),
             )
             .margin(10)

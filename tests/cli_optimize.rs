@@ -450,6 +450,16 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
             "opt.json: views.orbit.count: must be >= 1",
         ),
         (
+            "orbit with a bad height",
+            |o| o["views"]["orbit"]["height"] = json!([2, "low"]),
+            "opt.json: views.orbit.height[1]: expected a number",
+        ),
+        (
+            "orbit with no heights",
+            |o| o["views"]["orbit"]["height"] = json!([]),
+            "opt.json: views.orbit.height: an empty list of heights",
+        ),
+        (
             "view with a bad field of view",
             |o| {
                 o["views"] = json!([{"origin": [0, 1, 4], "target": [0, 0, 0], "fov_y": 190}]);

@@ -138,7 +138,7 @@ fn grid_run(terms: Terms, seed: u64) -> (f64, f64, f64, f64) {
     ));
     std::fs::create_dir_all(&dir).unwrap();
     let (start, target) = grid_scenes(&dir, 24);
-    let views = orbit(4, 3.5, 1.5, glam::Vec3::ZERO, 40.0);
+    let views = orbit(4, 3.5, &[1.5], glam::Vec3::ZERO, 40.0);
     let targets = render_targets(&target, &views, 64, 500).unwrap();
     let settings = Settings {
         params: vec![],

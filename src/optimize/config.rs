@@ -406,10 +406,19 @@ fn views(v: &Value, scene: &Scene) -> Result<Vec<View>> {
                 .opt_int("count", 1, MAX_VIEWS)?
                 .ok_or_else(|| Error::field(o.at("count"), "missing"))?;
             let radius = positive(o.req("radius")?, &o.at("radius"))?;
-            let height = o.opt_f32("height")?.unwrap_or(0.0);
+            let heights = match o.get("height") {
+                None => vec![0.0],
+                Some(Value::Array(list)) if !list.is_empty() => (list.iter().enumerate())
+                    .map(|(k, h)| number(h, &format!("{}[{k}]", o.at("height"))))
+                    .collect::<Result<Vec<f32>>>()?,
+                Some(Value::Array(_)) => {
+                    return Err(Error::field(o.at("height"), "an empty list of heights"));
+                }
+                Some(h) => vec![number(h, &o.at("height"))?],
+            };
             let look_at = o.opt_vec3("look_at")?.unwrap_or(glam::Vec3::ZERO);
             let fov_y = o.opt_f32("fov_y")?.unwrap_or(camera.fov_y.value);
-            let views = orbit(count as usize, radius, height, look_at, fov_y);
+            let views = orbit(count as usize, radius, &heights, look_at, fov_y);
             for (k, view) in views.iter().enumerate() {
                 check_view(view, scene, &format!("{} (view {k})", o.path))?;
             }
