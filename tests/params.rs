@@ -422,12 +422,15 @@ fn with_parameter_sets_the_value_and_recomputes_derived_data() {
         0.0
     );
 
-    // The tracer tolerance follows the scene's scale (here the floor's extent).
+    // The tracer's tolerance floor follows the smallest shape, never the scene's extent: a floor 400
+    // wide leaves it as it was, a smaller ball lowers it.
     let wide = scene.with_parameter("floor.half_size.x", 200.0).unwrap();
+    assert_eq!(wide.trace.eps, scene.trace.eps);
+    let small = scene.with_parameter("ball.radius", 0.01).unwrap();
     assert!(
-        wide.trace.eps > 3.0 * scene.trace.eps,
+        small.trace.eps < 0.1 * scene.trace.eps,
         "{} vs {}",
-        wide.trace.eps,
+        small.trace.eps,
         scene.trace.eps
     );
 

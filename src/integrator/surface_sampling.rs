@@ -201,7 +201,7 @@ pub fn sample_surface(
     let a = faces.pick(u_axis);
     let (b, c) = ((a + 1) % 3, (a + 2) % 3);
     let (min, ext) = (faces.bounds.min, faces.bounds.extent());
-    let pad = faces.pad(settings.eps);
+    let pad = faces.pad(settings.eps_at(faces.bounds.magnitude()));
     let mut o = min;
     o[a] -= pad;
     // `u < 1` keeps `q` on the half-open face; clamping guards rounding at the upper edge.

@@ -11,6 +11,12 @@ pub struct Aabb {
 }
 
 impl Aabb {
+    /// The largest coordinate magnitude of the box's corners (infinite for unbounded boxes): where the
+    /// tracer's local tolerance is taken for the box ([`crate::trace::TraceSettings::eps_at`]).
+    pub fn magnitude(&self) -> f32 {
+        self.min.abs().max(self.max.abs()).max_element()
+    }
+
     /// The box with corners `min` and `max`.
     #[inline]
     pub fn new(min: Vec3, max: Vec3) -> Self {

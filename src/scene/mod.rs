@@ -187,12 +187,13 @@ struct Nearest {
 /// Scenes with at most this many shapes have them traced nearest-bounds-first (sorted on the stack).
 const MAX_SORTED_SHAPES: usize = 16;
 
-/// Relative hit tolerance: `eps = RELATIVE_EPS · scene scale`.
+/// The tracer's tolerance floor relative to the scene's smallest shape: `eps = RELATIVE_EPS · s`, `s` the
+/// smallest extent (along any axis) of any finite shape's bounds ([`crate::trace::TraceSettings`]).
 pub const RELATIVE_EPS: f32 = 1e-5;
 
 impl Scene {
-    /// Assembles a scene and derives the tracer tolerance from its scale (the extent of the finite
-    /// shape bounds, emitters and camera).
+    /// Assembles a scene and derives the tracer's tolerance floor from its smallest shape (the smallest
+    /// extent of a finite shape's bounds; without one, the distance from the camera to its target).
     pub fn new(
         camera: Camera,
         integrator: IntegratorKind,
@@ -200,24 +201,22 @@ impl Scene {
         shapes: Vec<Shape>,
         emitters: Vec<NamedEmitter>,
     ) -> Self {
-        let mut extent = Aabb::around(camera.origin.value(), glam::Vec3::ZERO);
-        for s in &shapes {
-            if s.bounds.is_finite() {
-                extent = extent.union(&s.bounds);
-            }
-        }
-        for e in &emitters {
-            if let Some(b) = e.emitter.bounds() {
-                extent = extent.union(&b);
-            }
-        }
+        let smallest = (shapes.iter())
+            .filter(|s| s.bounds.is_finite() && !s.bounds.is_empty())
+            .map(|s| s.bounds.extent().min_element())
+            .filter(|e| *e > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        let scale = if smallest.is_finite() {
+            smallest
+        } else {
+            (camera.target.value() - camera.origin.value()).length()
+        };
         let finite_emitters: Vec<usize> = (0..emitters.len())
             .filter(|&i| !emitters[i].emitter.is_infinite())
             .collect();
         let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
-        let scale = extent.extent().max_element().max(1e-3);
         let trace = TraceSettings {
-            eps: RELATIVE_EPS * scale,
+            eps: (RELATIVE_EPS * scale).max(f32::MIN_POSITIVE),
             ..TraceSettings::default()
         };
         Self {
@@ -319,7 +318,8 @@ impl Scene {
     /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
     #[inline]
     fn trace_shape(&self, i: usize, ray: &Ray, t0: f32, t1: f32, nearest: &mut Nearest) {
-        match self.shapes[i].trace(ray, t0, t1, &self.trace) {
+        let shape = &self.shapes[i];
+        match shape.trace(ray, t0, t1, &self.shape_trace(shape)) {
             ShapeTrace::Hit(t) if t < nearest.t => {
                 nearest.t = t;
                 nearest.surface = Some(Surface::Shape(i));
@@ -329,24 +329,44 @@ impl Scene {
         }
     }
 
+    /// The tracer's settings for `shape`: the scene's, with the tolerance floor raised to `RELATIVE_EPS`
+    /// times the shape's own smallest extent (a large shape need not be resolved as finely as the
+    /// smallest one; unbounded shapes keep the scene's floor).
+    #[inline]
+    pub fn shape_trace(&self, shape: &Shape) -> TraceSettings {
+        let size = shape.bounds.extent().min_element();
+        let own = if size.is_finite() {
+            RELATIVE_EPS * size
+        } else {
+            0.0
+        };
+        TraceSettings {
+            eps: self.trace.eps.max(own),
+            ..self.trace
+        }
+    }
+
     /// The interval of `ray` in `(0, t_max)` where `shape` must be traced: its bounds grown by a margin.
     ///
     /// Bounds may be tight (a box's faces lie on them): a ray entering exactly on the surface would start
-    /// its trace at `φ = 0`, where the tracer cannot tell entering from leaving. The margin starts it
-    /// outside.
+    /// its trace at `φ = 0`, where the tracer cannot tell entering from leaving. The margin, the local
+    /// tolerance where the ray enters the bounds, starts it outside.
     #[inline]
     pub fn trace_interval(&self, shape: &Shape, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
-        shape.bounds.expanded(self.trace.eps).clip(ray, 0.0, t_max)
+        // The margin is the local tolerance where the ray enters, not at the bounds' far corners: a ray
+        // leaving a huge floor near the origin must not march inside a margin sized for its rim.
+        let origin = ray.o.abs().max_element();
+        let entry = shape.bounds.clip(ray, 0.0, t_max).map_or(0.0, |(t0, _)| t0);
+        let pad = self.trace.eps_at(origin + entry);
+        shape.bounds.expanded(pad).clip(ray, 0.0, t_max)
     }
 
     /// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: `p` moved off the surface by
-    /// `4 eps` to `w`'s side, but never by less than about 32 ulps of `p`'s largest coordinate, so that a
-    /// tolerance too small for the coordinates (a tiny finite extent next to unbounded shapes) cannot
-    /// make a ray start inside the surface noise and hit its own origin.
+    /// four times the local tolerance at `p` to `w`'s side (at least 64 ulps of `p`'s largest
+    /// coordinate), so that a ray cannot start inside the surface noise and hit its own origin.
     #[inline]
     pub fn offset_origin(&self, p: glam::Vec3, n: glam::Vec3, w: glam::Vec3) -> glam::Vec3 {
-        let floor = p.abs().max_element() * (32.0 * f32::EPSILON);
-        let offset = (4.0 * self.trace.eps).max(floor);
+        let offset = 4.0 * self.trace.eps_at_point(p);
         p + n * if n.dot(w) >= 0.0 { offset } else { -offset }
     }
 }

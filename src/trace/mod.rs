@@ -6,16 +6,30 @@
 //! function `g(t) = s·φ(o + t d)`, with `s = ±1` chosen so that `g(t0) ≥ 0` (`s = −1` if the ray starts
 //! inside: then the first crossing is the *exit*; on the surface, see below).
 //! Each step is `g/L` (Hart 1996), `L` the Lipschitz bound of `φ`, which cannot cross the surface. Where
-//! that step falls below the resolution `h = settings.eps`, the tracer *creeps* instead: steps of `h`,
+//! that step falls below the resolution `h` (the local tolerance [`TraceSettings::eps_at`] where the ray
+//! is, below written `eps`), the tracer *creeps* instead: steps of `h`,
 //! doubling on each consecutive creep step up to `64 h`, until `g` changes sign (an overshoot into the
 //! shape is fine: it brackets the crossing). The bracket is then refined with the Illinois variant of
 //! regula falsi. Creeping with growing steps keeps grazing rays cheap (a ray skimming a unit sphere at
 //! `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`; fixed `eps` steps would spend the whole
 //! budget there).
 //!
+//! # Tolerances
+//!
+//! Every tolerance is local: at coordinates of magnitude `m` (the largest of `|x|, |y|, |z|`) the
+//! resolution is `eps(m) = max(eps₀, 16 ε m)` and a point is on the surface when `|φ| ≤ eps(m)/100`, `ε`
+//! the `f32` machine epsilon: tied to the rounding of the coordinates there, whatever the distance
+//! between the scene's farthest objects. `eps₀` is a floor for small
+//! coordinates, `10⁻⁵` times the size of the shape being traced (its bounds' smallest extent; the scene's
+//! smallest shape for unbounded ones), so tolerances scale with the scene. Along a ray the magnitude is
+//! bounded by `|o| + t`. The same local value sizes the margins elsewhere: the bounds a ray is clipped
+//! to (at its entry point), the offset of rays leaving a surface (four tolerances), the boundary
+//! samplers' occlusion margins and the area sampler's padding.
+//!
 //! Consequences, by design:
-//! - **Tolerance.** The returned `t` satisfies `|φ(t)| ≤ eps/100` (or the bracket has shrunk to a few ulps
-//!   of `t`), so `|t − t_true| ≲ 0.01·eps / |∇φ·d|`: tight for transversal hits, looser for grazing ones.
+//! - **Tolerance.** The returned `t` satisfies `|φ(t)| ≤ eps/100` (or the bracket has shrunk to a few
+//!   ulps of `t`), so `|t − t_true| ≲ 0.01·eps / |∇φ·d|`: tight for transversal hits, looser for grazing
+//!   ones.
 //! - **Tangent grazes** (the ray passing within `eps` of the surface without crossing it, or touching it) are
 //!   **skipped**: they are not crossings. This is what tangent lines of the boundary sampler need (a line
 //!   started on the surface at its tangent point must find the *next* real crossing) and what keeps
@@ -39,22 +53,55 @@ use crate::math::Ray;
 use crate::sdf::Sdf;
 
 /// Tolerances of the tracer.
+///
+/// The tolerance is local: at a point whose largest coordinate has magnitude `m` it is
+/// [`TraceSettings::eps_at`]`(m) = max(eps, 16 ε m)` (`ε` the `f32` machine epsilon), so that it follows
+/// the float resolution where the ray is and never the distance between a scene's farthest objects;
+/// `eps` is a floor for coordinates near the origin, set from the size of the scene's smallest shape.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct TraceSettings {
-    /// Hit tolerance in scene units (|φ| below this, after refinement, is a hit). Set from the scene scale.
+    /// Tolerance floor in scene units: the hit tolerance where the coordinates are small (see
+    /// [`TraceSettings::eps_at`]).
     ///
-    /// Also the tracer's resolution: closer than `eps` to a surface it advances by steps of `eps` looking for
-    /// the sign change; after refinement `|φ(t)| ≤ eps / 100` (see the [module docs](self)).
+    /// The tolerance is also the tracer's resolution: closer than it to a surface the tracer advances by
+    /// steps of it looking for the sign change; after refinement `|φ(t)|` is below
+    /// [`TraceSettings::on_surface_at`] (see the [module docs](self)).
     pub eps: f32,
     /// Steps before a ray is declared exhausted.
     pub max_steps: u32,
+}
+
+/// The local tolerance in ulps of the coordinates' magnitude (see [`TraceSettings`]).
+pub const TOLERANCE_ULPS: f32 = 16.0;
+
+impl TraceSettings {
+    /// The hit tolerance where the largest coordinate has magnitude `magnitude`: `max(eps, 16 ε m)`.
+    #[inline]
+    pub fn eps_at(&self, magnitude: f32) -> f32 {
+        self.eps
+            .max(TOLERANCE_ULPS * f32::EPSILON * magnitude)
+            .max(f32::MIN_POSITIVE)
+    }
+
+    /// [`TraceSettings::eps_at`] the point `p`.
+    #[inline]
+    pub fn eps_at_point(&self, p: glam::Vec3) -> f32 {
+        self.eps_at(p.abs().max_element())
+    }
+
+    /// `|φ|` below which a point of magnitude `magnitude` counts as on the surface (the refinement
+    /// target): a hundredth of [`TraceSettings::eps_at`].
+    #[inline]
+    pub fn on_surface_at(&self, magnitude: f32) -> f32 {
+        REFINE_FRACTION * self.eps_at(magnitude)
+    }
 }
 
 impl Default for TraceSettings {
     fn default() -> Self {
         Self {
             eps: 1e-4,
-            max_steps: 512,
+            max_steps: 2048,
         }
     }
 }
@@ -129,9 +176,10 @@ struct Marcher<'a> {
     ray: &'a Ray,
     inv_l: f32,
     t1: f32,
-    eps: f32,
-    /// `|φ|` below which a point counts as on the surface (the refinement target).
-    on_surface: f32,
+    settings: TraceSettings,
+    /// Largest coordinate magnitude of the ray's origin: with `|t|` (the direction is a unit vector) a
+    /// bound of the coordinates' magnitude along the ray, where the local tolerance is taken.
+    origin_magnitude: f32,
     steps_left: u32,
     /// Evaluations spent refining brackets (not charged to the step budget; kept for tests).
     refine_evals: u32,
@@ -139,21 +187,36 @@ struct Marcher<'a> {
 
 impl<'a> Marcher<'a> {
     fn new(sdf: &'a Sdf, lipschitz: f32, ray: &'a Ray, t1: f32, settings: &TraceSettings) -> Self {
-        let eps = if settings.eps > 0.0 {
-            settings.eps
-        } else {
-            0.0
+        let settings = TraceSettings {
+            eps: if settings.eps > 0.0 {
+                settings.eps
+            } else {
+                0.0
+            },
+            ..*settings
         };
         Self {
             sdf,
             ray,
             inv_l: inverse_lipschitz(lipschitz),
             t1,
-            eps,
-            on_surface: REFINE_FRACTION * eps,
+            settings,
+            origin_magnitude: ray.o.abs().max_element(),
             steps_left: settings.max_steps,
             refine_evals: 0,
         }
+    }
+
+    /// The local tolerance at parameter `t` ([`TraceSettings::eps_at`]).
+    #[inline]
+    fn eps(&self, t: f32) -> f32 {
+        self.settings.eps_at(self.origin_magnitude + t.abs())
+    }
+
+    /// `|φ|` below which the point at `t` counts as on the surface.
+    #[inline]
+    fn on_surface(&self, t: f32) -> f32 {
+        self.settings.on_surface_at(self.origin_magnitude + t.abs())
     }
 
     #[inline]
@@ -169,7 +232,8 @@ impl<'a> Marcher<'a> {
     /// float noise for the first few probes.
     fn side(&mut self, t: f32, phi: f32) -> Side {
         let sign_of = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
-        if phi.abs() > self.on_surface {
+        let (eps, on_surface) = (self.eps(t), self.on_surface(t));
+        if phi.abs() > on_surface {
             let sign = sign_of(phi);
             return Side {
                 sign,
@@ -177,13 +241,13 @@ impl<'a> Marcher<'a> {
                 g: sign * phi,
             };
         }
-        let mut delta = self.eps;
+        let mut delta = eps;
         let mut last = Side {
             sign: sign_of(phi),
             t,
             g: phi.abs(),
         };
-        while delta <= MAX_CREEP * self.eps && last.t < self.t1 {
+        while delta <= MAX_CREEP * eps && last.t < self.t1 {
             let tp = (t + delta.max(min_progress(t))).min(self.t1);
             let p = self.phi(tp);
             let sign = sign_of(p);
@@ -192,7 +256,7 @@ impl<'a> Marcher<'a> {
                 t: tp,
                 g: sign * p,
             };
-            if p.abs() > self.on_surface {
+            if p.abs() > on_surface {
                 break;
             }
             delta *= 2.0;
@@ -207,7 +271,7 @@ impl<'a> Marcher<'a> {
         let (mut t, mut g) = (from.t, from.g);
         // Creep step inside the `eps` zone: starts at `eps`, doubles on each consecutive creep step up to
         // `MAX_CREEP · eps`, resets when the ray leaves the zone.
-        let mut creep = self.eps;
+        let mut creep = self.eps(t);
         loop {
             // Also stops on a NaN parameter.
             if t.partial_cmp(&self.t1) != Some(std::cmp::Ordering::Less) {
@@ -217,12 +281,13 @@ impl<'a> Marcher<'a> {
                 return Crossing::Exhausted(t);
             }
             let safe = g * self.inv_l;
-            let step = if safe >= self.eps {
-                creep = self.eps;
+            let eps = self.eps(t);
+            let step = if safe >= eps {
+                creep = eps;
                 safe
             } else {
                 let s = creep.max(safe);
-                creep = (2.0 * creep).min(MAX_CREEP * self.eps);
+                creep = (2.0 * creep).min(MAX_CREEP * eps);
                 s
             }
             .max(min_progress(t));
@@ -239,7 +304,7 @@ impl<'a> Marcher<'a> {
             let (hit, beyond, g_beyond) = self.refine(sign, t, g, t_next, g_next);
             let next = self.side(beyond, sign * g_beyond);
             // A crossing right at `t1` cannot be probed beyond: keep it.
-            let undecided_at_end = next.t >= self.t1 && next.g <= self.on_surface;
+            let undecided_at_end = next.t >= self.t1 && next.g <= self.on_surface(next.t);
             if next.sign != sign || undecided_at_end {
                 return Crossing::Hit { t: hit, next };
             }
@@ -247,7 +312,7 @@ impl<'a> Marcher<'a> {
             from = next;
             t = from.t;
             g = from.g;
-            creep = self.eps;
+            creep = self.eps(t);
         }
     }
 
@@ -260,11 +325,9 @@ impl<'a> Marcher<'a> {
         let (mut ga, mut gb) = (ga, gb);
         let (mut wa, mut wb) = (ga, gb);
         let mut side = 0i8;
+        let on_surface = self.on_surface(b);
         for _ in 0..REFINE_ITERATIONS {
-            if ga.abs() <= self.on_surface
-                || gb.abs() <= self.on_surface
-                || b - a <= 2.0 * min_progress(b)
-            {
+            if ga.abs() <= on_surface || gb.abs() <= on_surface || b - a <= 2.0 * min_progress(b) {
                 break;
             }
             // Root of the secant through (a, wa) and (b, wb): m = b − wb (b − a) / (wb − wa). With

@@ -280,7 +280,7 @@ impl Frustum {
             (fwd * (cy + grow) - up * f, 0.0),
             (up * f + fwd * (h + grow - cy), 0.0),
             // In front of the eye (the projection needs z > 0).
-            (fwd, 4.0 * scene.trace.eps),
+            (fwd, 4.0 * scene.trace.eps_at_point(frame.origin.into())),
         ];
         Self {
             eye: frame.origin.into(),

@@ -129,9 +129,10 @@ pub(crate) fn splat_on_film<S: Scalar>(
 pub(crate) const BACKGROUND_OFFSET_PIXELS: f32 = 0.02;
 
 /// The world-space length of [`BACKGROUND_OFFSET_PIXELS`] at distance `dist` from the eye (`focal` in
-/// pixels), at least `4 eps` so the offset ray clears the edge's own surface.
+/// pixels), at least four local tolerances there so the offset ray clears the edge's own surface.
 pub(crate) fn background_offset(scene: &Scene, dist: f32, focal: f32) -> f32 {
-    (BACKGROUND_OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps)
+    let magnitude = scene.camera.origin.value().abs().max_element() + dist;
+    (BACKGROUND_OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps_at(magnitude))
 }
 
 /// The rows `(∂u/∂x, ∂v/∂x)` of the film projection's 2×3 Jacobian at `x_B = eye + q` (`None` behind
@@ -166,7 +167,7 @@ pub(crate) fn background_radiance(
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> Option<glam::Vec3> {
-    let margin = 4.0 * delta + 8.0 * scene.trace.eps;
+    let margin = 4.0 * delta + 8.0 * scene.trace.eps_at(ray.o.abs().max_element() + dist);
     if occluded(scene, &ray, dist - margin, None, counters) {
         return None;
     }

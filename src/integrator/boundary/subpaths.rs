@@ -100,7 +100,7 @@ pub fn connect_to_camera(
     if !(dist > 0.0 && dist.is_finite()) {
         return None;
     }
-    let margin = 8.0 * scene.trace.eps + 1e-5 * dist;
+    let margin = 8.0 * scene.trace.eps_at_point(x) + 1e-5 * dist;
     if occluded(
         scene,
         &Ray::new(eye, to_x / dist),
