@@ -189,7 +189,7 @@ const MAX_SORTED_SHAPES: usize = 16;
 
 /// The tracer's tolerance floor relative to the scene's smallest shape: `eps = RELATIVE_EPS · s`, `s` the
 /// smallest extent (along any axis) of any finite shape's bounds ([`crate::trace::TraceSettings`]).
-pub const RELATIVE_EPS: f32 = 1e-5;
+pub const RELATIVE_EPS: f32 = 1e-4;
 
 impl Scene {
     /// Assembles a scene and derives the tracer's tolerance floor from its smallest shape (the smallest

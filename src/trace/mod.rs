@@ -20,7 +20,7 @@
 //! resolution is `eps(m) = max(eps₀, 16 ε m)` and a point is on the surface when `|φ| ≤ eps(m)/100`, `ε`
 //! the `f32` machine epsilon: tied to the rounding of the coordinates there, whatever the distance
 //! between the scene's farthest objects. `eps₀` is a floor for small
-//! coordinates, `10⁻⁵` times the size of the shape being traced (its bounds' smallest extent; the scene's
+//! coordinates, `10⁻⁴` times the size of the shape being traced (its bounds' smallest extent; the scene's
 //! smallest shape for unbounded ones), so tolerances scale with the scene. Along a ray the magnitude is
 //! bounded by `|o| + t`. The same local value sizes the margins elsewhere: the bounds a ray is clipped
 //! to (at its entry point), the offset of rays leaving a surface (four tolerances), the boundary
