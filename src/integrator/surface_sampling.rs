@@ -145,13 +145,7 @@ impl Faces {
     /// surface even when the surface touches the box (a sharp box): a few tracer tolerances, and enough
     /// ulps of the coordinates to move the start at all.
     fn pad(&self, eps: f32) -> f32 {
-        let scale = self
-            .bounds
-            .min
-            .abs()
-            .max(self.bounds.max.abs())
-            .max_element();
-        4.0 * eps.max(0.0) + 1e-5 * (scale + self.bounds.extent().max_element())
+        4.0 * eps.max(0.0) + 1e-5 * (self.bounds.magnitude() + self.bounds.extent().max_element())
     }
 }
 

@@ -87,13 +87,6 @@ pub struct OptimizeConfig {
     pub target_spp: u32,
     /// Write a snapshot of the views every this many iterations (`None`: only at the end).
     pub snapshot_every: Option<u32>,
-    /// Iterations (0-based, in `1..iterations`, increasing) before which the optimised grids are
-    /// refined `n → 2n − 1` samples per axis (also in `settings`).
-    pub upsample_at: Vec<u32>,
-    /// Redistance the optimised grids every this many iterations (also in `settings`).
-    pub redistance_every: Option<u32>,
-    /// Weight of the grids' smoothness (Laplacian) term (0: none; also in `settings`).
-    pub laplacian: f32,
 }
 
 impl OptimizeConfig {
@@ -204,15 +197,12 @@ fn parse(text: &str, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             views_per_iteration,
             seed,
             terms,
-            upsample_at: upsample_at.clone(),
+            upsample_at,
             redistance_every,
             laplacian,
         },
         target_spp,
         snapshot_every,
-        upsample_at,
-        redistance_every,
-        laplacian,
     };
     Ok(config)
 }

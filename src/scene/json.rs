@@ -30,6 +30,17 @@ pub const DEFAULT_MAX_DEPTH: u32 = 5;
 /// Largest accepted image side, in pixels (guards against typos that would allocate gigabytes).
 pub const MAX_IMAGE_SIDE: u64 = 16384;
 
+/// The top-level fields of a scene file, in the order of the README's scene format (also the order
+/// [`crate::scene::patch::scene_text`] writes them in).
+pub(crate) const SCENE_KEYS: &[&str] = &[
+    "description",
+    "camera",
+    "integrator",
+    "spp",
+    "shapes",
+    "emitters",
+];
+
 /// The sdf node types, in the order error messages list them.
 const SDF_TYPES: &[&str] = &[
     "sphere",
@@ -438,18 +449,7 @@ impl Context<'_> {
     }
 
     fn scene(&mut self, root: &Value) -> Result<ParsedScene> {
-        let o = Obj::new(
-            root,
-            String::new(),
-            &[
-                "description",
-                "camera",
-                "integrator",
-                "spp",
-                "shapes",
-                "emitters",
-            ],
-        )?;
+        let o = Obj::new(root, String::new(), SCENE_KEYS)?;
         o.opt_string("description")?;
         let camera = camera(o.req("camera")?, "camera")?;
         let integrator = match o.get("integrator") {

@@ -12,6 +12,7 @@
 //! directions, image size, integrator) is kept as it is.
 
 use super::Scene;
+use super::json::SCENE_KEYS;
 use crate::error::{Error, Result};
 use serde_json::{Map, Number, Value};
 use std::collections::HashMap;
@@ -359,18 +360,9 @@ impl Walk<'_> {
     }
 }
 
-/// Keys written first, in this order (the order of the README's scene format); the others follow in
+/// Keys written first, after the scene's own ([`SCENE_KEYS`]), in this order; the others follow in
 /// alphabetical order.
-const KEY_ORDER: &[&str] = &[
-    "description",
-    "camera",
-    "integrator",
-    "spp",
-    "shapes",
-    "emitters",
-    "name",
-    "type",
-];
+const MEMBER_KEYS_FIRST: &[&str] = &["name", "type"];
 
 /// A scene document as text: indented objects, arrays of numbers on one line (`"center": [0, 1, 0]`),
 /// names and types first in every object, ending in a newline.
@@ -387,8 +379,9 @@ fn write_value(v: &Value, indent: usize, out: &mut String) {
         Value::Object(map) if !map.is_empty() => {
             let mut keys: Vec<&String> = map.keys().collect();
             keys.sort_by_key(|k| {
-                let rank = KEY_ORDER.iter().position(|o| o == k);
-                (rank.unwrap_or(KEY_ORDER.len()), k.as_str())
+                let mut first = SCENE_KEYS.iter().chain(MEMBER_KEYS_FIRST);
+                let rank = first.position(|o| o == k);
+                (rank.unwrap_or(usize::MAX), k.as_str())
             });
             out.push_str("{\n");
             for (i, key) in keys.iter().enumerate() {
