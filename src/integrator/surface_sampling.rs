@@ -9,7 +9,7 @@
 //! 1. choosing an axis `a` with probability `c_a = A_a / Σ_b A_b` (one number `u_axis`);
 //! 2. choosing `q` uniformly on `F_a`, density `1 / A_a` (two numbers `u_face`);
 //! 3. tracing the line `ℓ_q = {q + t e_a}` across the box and keeping every crossing `x` of the surface
-//!    ([`all_hits_checked`]).
+//!    ([`crate::trace::all_crossings_checked`]).
 //!
 //! # Density of a hit
 //!
@@ -65,7 +65,7 @@
 use crate::error::{Error, Result};
 use crate::math::{Aabb, Ray};
 use crate::scene::Shape;
-use crate::trace::{TraceSettings, all_hits_checked};
+use crate::trace::{TraceSettings, all_crossings_checked};
 use glam::{Vec2, Vec3};
 
 /// A point drawn on a surface by [`sample_surface`].
@@ -203,7 +203,7 @@ pub fn sample_surface(
     o[c] = (min[c] + u_face.y * ext[c]).min(faces.bounds.max[c]);
     let ray = Ray::new(o, Vec3::AXES[a]);
     let length = ext[a] + 2.0 * pad;
-    let (ts, exhausted) = all_hits_checked(
+    let (ts, exhausted) = all_crossings_checked(
         &shape.sdf,
         shape.lipschitz,
         &shape.local_ray(&ray),

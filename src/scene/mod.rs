@@ -19,7 +19,7 @@ use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};
 use crate::sdf::Sdf;
-use crate::trace::{ShapeTrace, TraceSettings, sphere_trace};
+use crate::trace::{ShapeTrace, TraceSettings, first_crossing};
 
 /// An implicit surface with its material, rigidly translated by `translate` (zero unless a derivative or a
 /// finite difference moves the whole shape): the surface is `{x : sdf(x − translate) = 0}`.
@@ -97,10 +97,10 @@ impl Shape {
         Ray::new(ray.o - self.translate.value(), ray.d)
     }
 
-    /// First crossing of the surface along `ray` in `[t0, t1]` (see [`sphere_trace`]).
+    /// First crossing of the surface along `ray` in `[t0, t1]` (see [`first_crossing`]).
     #[inline]
     pub fn trace(&self, ray: &Ray, t0: f32, t1: f32, settings: &TraceSettings) -> ShapeTrace {
-        sphere_trace(
+        first_crossing(
             &self.sdf,
             self.lipschitz,
             &self.local_ray(ray),

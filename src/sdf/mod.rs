@@ -30,6 +30,7 @@ mod csg;
 mod grid;
 mod grid_edit;
 pub mod interval;
+mod line_crossings;
 mod npy;
 mod primitives;
 mod transform;
@@ -37,6 +38,7 @@ mod validate;
 
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use creases::surfaces_may_meet;
+pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
 
 use crate::error::Result;

@@ -14,6 +14,17 @@
 //! `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`; fixed `eps` steps would spend the whole
 //! budget there).
 //!
+//! # Closed forms
+//!
+//! Spheres, planes, boxes and similarity transforms of them have their crossings with a line in closed
+//! form ([`Sdf::line_crossings`]); [`first_crossing`] and [`all_crossings_checked`] take those instead of
+//! marching wherever the answer is certain, with the conventions below, and fall back to marching where
+//! it is not: a start on the surface (its side is the one the ray moves into, which only probing
+//! decides), a chord shorter than two creep steps (a graze, which marching may skip), a crossing on a
+//! box's rounded edge or corner, or a closed form that disagrees with the sign of `φ` at the start
+//! (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
+//! steps. [`sphere_trace`] and [`all_hits`] always march.
+//!
 //! # Tolerances
 //!
 //! Every tolerance is local: at coordinates of magnitude `m` (the largest of `|x|, |y|, |z|`) the
@@ -380,6 +391,91 @@ impl<'a> Marcher<'a> {
             return None;
         }
         Some(self.side(t0, phi))
+    }
+}
+
+/// The crossings of `sdf` along `ray` in `(t0, t1]` from [`Sdf::line_crossings`], or `None` where the
+/// marcher must decide: no closed form, a start on the surface (`|φ(t0)|` at most the on-surface level:
+/// its side is the one the ray moves into, which the marcher probes), a chord shorter than two creep
+/// steps (a graze, which the marcher may skip), a crossing on a box's rounded edge, or a closed form that
+/// disagrees with the sign of `φ(t0)`. With `first_only`, only the first crossing is wanted.
+fn closed_form(
+    sdf: &Sdf,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+    first_only: bool,
+) -> Option<([f32; 2], usize)> {
+    if t0.is_nan() || t1.is_nan() || t0 > t1 {
+        return None;
+    }
+    let origin_magnitude = ray.o.abs().max_element();
+    let phi0 = sdf.eval_f32(ray.at(t0));
+    if phi0.is_nan() || phi0.abs() <= settings.on_surface_at(origin_magnitude + t0.abs()) {
+        return None;
+    }
+    let line = sdf.line_crossings(ray)?;
+    let t = &line.t[..line.count];
+    if line.count == 2 {
+        let eps = settings.eps_at(origin_magnitude + t[0].abs().max(t[1].abs()));
+        if t[1] - t[0] < 2.0 * MAX_CREEP * eps {
+            return None;
+        }
+    }
+    let behind = t.iter().filter(|&&t| t <= t0).count();
+    if (phi0 < 0.0) != (line.inside_before ^ (behind % 2 == 1)) {
+        return None;
+    }
+    let mut found = ([0.0; 2], 0);
+    for (k, &t) in t.iter().enumerate().skip(behind) {
+        if t > t1 {
+            break;
+        }
+        if !line.exact[k] {
+            return None;
+        }
+        found.0[found.1] = t;
+        found.1 += 1;
+        if first_only {
+            break;
+        }
+    }
+    Some(found)
+}
+
+/// First zero crossing of `sdf` along `ray` in `[t0, t1]`, with the conventions of [`sphere_trace`]:
+/// from the closed form where the surface has one and the answer is certain (spheres, planes, the flat
+/// faces of boxes, transforms of these: [`Sdf::line_crossings`]), by sphere tracing otherwise.
+pub fn first_crossing(
+    sdf: &Sdf,
+    lipschitz: f32,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+) -> ShapeTrace {
+    match closed_form(sdf, ray, t0, t1, settings, true) {
+        Some((_, 0)) => ShapeTrace::Miss,
+        Some((t, _)) => ShapeTrace::Hit(t[0]),
+        None => sphere_trace(sdf, lipschitz, ray, t0, t1, settings),
+    }
+}
+
+/// Every zero crossing of `sdf` along `ray` in `[t0, t1]`, with the conventions of
+/// [`all_hits_checked`]: from the closed form where it is certain (see [`first_crossing`]), by sphere
+/// tracing otherwise.
+pub fn all_crossings_checked(
+    sdf: &Sdf,
+    lipschitz: f32,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+) -> (Vec<f32>, Option<f32>) {
+    match closed_form(sdf, ray, t0, t1, settings, false) {
+        Some((t, count)) => (t[..count].to_vec(), None),
+        None => all_hits_checked(sdf, lipschitz, ray, t0, t1, settings),
     }
 }
 
