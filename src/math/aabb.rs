@@ -118,6 +118,53 @@ impl Aabb {
         }
         (t0 <= t1).then_some((t0, t1))
     }
+
+    /// As [`Aabb::clip`] for the box grown by `margin(t)` on every side, `t` the parameter where the ray
+    /// enters the box itself (`t_min` if it starts inside): one slab test for both.
+    #[inline]
+    pub fn clip_with_margin(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        margin: impl FnOnce(f32) -> f32,
+    ) -> Option<(f32, f32)> {
+        let inv = ray.d.recip();
+        let ta = (self.min - ray.o) * inv;
+        let tb = (self.max - ray.o) * inv;
+        let (lo, hi) = (ta.min(tb), ta.max(tb));
+        // Axes the ray is parallel to do not bound it; comparisons skip NaN (a ray in a face's plane).
+        let (mut entry, mut exit) = (t_min, f32::INFINITY);
+        for k in 0..3 {
+            if ray.d[k] != 0.0 {
+                if lo[k] > entry {
+                    entry = lo[k];
+                }
+                if hi[k] < exit {
+                    exit = hi[k];
+                }
+            }
+        }
+        // A ray that misses the box passes closest to it between leaving one slab and entering the next.
+        let r = margin(entry.min(exit.max(t_min)));
+        let (mut t0, mut t1) = (t_min, t_max);
+        for k in 0..3 {
+            if ray.d[k] == 0.0 {
+                if ray.o[k] < self.min[k] - r || ray.o[k] > self.max[k] + r {
+                    return None;
+                }
+                continue;
+            }
+            let grow = r * inv[k].abs();
+            if lo[k] - grow > t0 {
+                t0 = lo[k] - grow;
+            }
+            if hi[k] + grow < t1 {
+                t1 = hi[k] + grow;
+            }
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
 }
 
 #[cfg(test)]
@@ -133,6 +180,59 @@ mod tests {
         assert_eq!(b.clip(&miss, 0.0, f32::INFINITY), None);
         let inside = Ray::new(Vec3::ZERO, Vec3::X);
         assert_eq!(b.clip(&inside, 0.0, 10.0), Some((0.0, 1.0)));
+    }
+
+    #[test]
+    fn clip_with_margin_matches_clipping_the_grown_box() {
+        let b = Aabb::new(Vec3::new(-1.0, -0.5, -2.0), Vec3::new(1.0, 0.5, 2.0));
+        let margin = |t: f32| 0.01 * (1.0 + t.abs());
+        let mut checked = 0;
+        for i in 0..400 {
+            let f = i as f32;
+            let o = Vec3::new(
+                (f * 0.37).sin() * 4.0,
+                (f * 0.11).cos() * 3.0,
+                (f * 0.23).sin() * 5.0,
+            );
+            // Every tenth ray is parallel to an axis, some of them in a face's plane or just outside it.
+            let d = match i % 10 {
+                0 => Vec3::X,
+                1 => Vec3::NEG_Y,
+                // Aimed at a point inside the box grown by a quarter: most rays hit it.
+                _ => {
+                    (Vec3::new((f * 0.71).cos(), (f * 0.53).sin(), (f * 0.29).cos()) * b.max * 1.25
+                        - o)
+                        .normalize()
+                }
+            };
+            let o = if i % 20 == 0 {
+                Vec3::new(o.x, 0.5, o.z)
+            } else {
+                o
+            };
+            let o = if i % 20 == 10 {
+                Vec3::new(o.x, 0.505, o.z)
+            } else {
+                o
+            };
+            let ray = Ray::new(o, d);
+            let entry = b.clip(&ray, 0.0, 100.0).map(|(t0, _)| t0);
+            let got = b.clip_with_margin(&ray, 0.0, 100.0, margin);
+            if let Some(t) = entry {
+                let want = b.expanded(margin(t)).clip(&ray, 0.0, 100.0);
+                let (g, w) = (got.unwrap(), want.unwrap());
+                assert!(
+                    (g.0 - w.0).abs() < 1e-5 && (g.1 - w.1).abs() < 1e-5,
+                    "ray {i}: {g:?} vs {w:?}"
+                );
+                checked += 1;
+            } else if let Some((t0, t1)) = got {
+                // Missing the box itself: only a sliver of a box grown by about the margin may remain.
+                let grown = b.expanded(margin(t1) * 2.0);
+                assert!(grown.contains(ray.at(0.5 * (t0 + t1))), "ray {i}");
+            }
+        }
+        assert!(checked > 100);
     }
 
     #[test]

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};
-use crate::sdf::Sdf;
+use crate::sdf::{Lipschitz, Sdf};
 use crate::trace::{ShapeTrace, TraceSettings, first_crossing};
 
 /// An implicit surface with its material, rigidly translated by `translate` (zero unless a derivative or a
@@ -35,8 +35,8 @@ pub struct Shape {
     pub translate: Param3,
     /// World-space box around the surface: [`Sdf::bounds`] moved by `translate` (possibly infinite).
     pub bounds: Aabb,
-    /// Lipschitz bound of the SDF, from [`Sdf::lipschitz`].
-    pub lipschitz: f32,
+    /// Lipschitz bounds of the SDF on each side of its surface, from [`Sdf::lipschitz_sided`].
+    pub lipschitz: Lipschitz,
 }
 
 impl Shape {
@@ -50,7 +50,7 @@ impl Shape {
         let t = translate.value();
         let local = sdf.bounds();
         let bounds = Aabb::new(local.min + t, local.max + t);
-        let lipschitz = sdf.lipschitz();
+        let lipschitz = sdf.lipschitz_sided();
         Self {
             name: name.into(),
             sdf,
@@ -356,9 +356,7 @@ impl Scene {
         // The margin is the local tolerance where the ray enters, not at the bounds' far corners: a ray
         // leaving a huge floor near the origin must not march inside a margin sized for its rim.
         let origin = ray.o.abs().max_element();
-        let entry = shape.bounds.clip(ray, 0.0, t_max).map_or(0.0, |(t0, _)| t0);
-        let pad = self.trace.eps_at(origin + entry);
-        shape.bounds.expanded(pad).clip(ray, 0.0, t_max)
+        (shape.bounds).clip_with_margin(ray, 0.0, t_max, |entry| self.trace.eps_at(origin + entry))
     }
 
     /// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: `p` moved off the surface by

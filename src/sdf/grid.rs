@@ -9,7 +9,7 @@
 //! Edges: the lattice is extended by one ghost layer per face with *linear extrapolation*
 //! (`c_{−1} = 2c_0 − c_1`, `c_n = 2c_{n−1} − c_{n−2}`), folded into the weights. The spline stays C2 up
 //! to the faces, still reproduces linear fields (no `O(h)` bias at the faces, unlike clamping the
-//! indices). The Lipschitz bound takes the extended lattice's differences (see `axis_lipschitz`).
+//! indices). The Lipschitz bound takes the extended lattice's differences, patch by patch (see `lipschitz`).
 //!
 //! Outside the box: `φ(x) = φ(clamp(x)) + |x − clamp(x)|`, a valid bound for sphere tracing.
 
@@ -198,63 +198,143 @@ fn extended(data: &GridData, x: isize, y: isize, z: isize) -> f32 {
     data.at(x as usize, y as usize, z as usize)
 }
 
-/// Per-axis bounds `L_a = max |c_{i+1} − c_i| / h_a` over the ghost-extended lattice. Along axis `a` the
-/// ghost differences repeat the first and last ones, but the ghost layers of the *other* axes carry
-/// extrapolated differences (`2Δ_0 − Δ_1`), which can be larger: they are included.
-fn axis_lipschitz(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> [f32; 3] {
+/// The ghost-extended lattice (`(nx + 2)(ny + 2)(nz + 2)` values, x fastest) and its dimensions.
+fn extended_lattice(data: &GridData) -> (Vec<f32>, [usize; 3]) {
     let [nx, ny, nz] = data.dims;
-    let mut m = [0.0f32; 3];
-    let ghost = |i: usize, n: usize| i == 0 || i == n + 1;
-    // Interior points (no ghost index) read the array directly; only ghost layers recurse.
-    let value = |x: usize, y: usize, z: usize| {
-        if ghost(x, nx) || ghost(y, ny) || ghost(z, nz) {
-            extended(data, x as isize - 1, y as isize - 1, z as isize - 1)
-        } else {
-            data.at(x - 1, y - 1, z - 1)
-        }
-    };
-    for z in 0..nz + 2 {
-        for y in 0..ny + 2 {
-            for x in 0..nx + 2 {
-                let c = value(x, y, z);
-                if x + 1 < nx + 2 {
-                    m[0] = m[0].max((value(x + 1, y, z) - c).abs());
-                }
-                if y + 1 < ny + 2 {
-                    m[1] = m[1].max((value(x, y + 1, z) - c).abs());
-                }
-                if z + 1 < nz + 2 {
-                    m[2] = m[2].max((value(x, y, z + 1) - c).abs());
-                }
+    let e = [nx + 2, ny + 2, nz + 2];
+    let mut out = Vec::with_capacity(e[0] * e[1] * e[2]);
+    for z in 0..e[2] {
+        for y in 0..e[1] {
+            for x in 0..e[0] {
+                let interior =
+                    (1..=nx).contains(&x) && (1..=ny).contains(&y) && (1..=nz).contains(&z);
+                out.push(if interior {
+                    data.at(x - 1, y - 1, z - 1)
+                } else {
+                    extended(data, x as isize - 1, y as isize - 1, z as isize - 1)
+                });
             }
         }
     }
-    let ext = bmax - bmin;
-    std::array::from_fn(|a| {
-        if ext[a] > 0.0 {
-            m[a] * (data.dims[a] - 1) as f32 / ext[a]
-        } else {
-            0.0
-        }
-    })
+    (out, e)
 }
 
-/// Lipschitz bound of a grid node, exact for the spline.
-///
-/// The partial `∂_a φ` of a cubic B-spline is a quadratic B-spline (times cubic ones) whose control points
-/// are `(c_{i+1} − c_i)/h_a`, a convex combination, so `|∂_a φ| ≤ L_a`. Inside the box
-/// `|∇φ|² ≤ Σ L_a²`; beyond face `a` the gradient is `(±1 along a, the other partials)`, so
-/// `|∇φ|² ≤ Σ L_a² − L_a² + 1` (edges and corners give less). Hence `L = sqrt(Σ L_a² + max(0, 1 − min L_a²))`
-/// (not just `max(1, sqrt(Σ L_a²))`: a planar field `φ = x` has `|∇φ| = √2` beyond a `y` face).
-pub(super) fn lipschitz(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> f32 {
-    if !data.usable() {
-        return 1.0;
+/// The maximum of `v` (dimensions `dims`, x fastest) over windows of `w` consecutive entries along `axis`:
+/// the result has `dims[axis] − w + 1` entries along it.
+fn window_max(v: &[f32], dims: [usize; 3], axis: usize, w: usize) -> (Vec<f32>, [usize; 3]) {
+    let mut out_dims = dims;
+    out_dims[axis] = dims[axis] + 1 - w;
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let mut out = Vec::with_capacity(out_dims.iter().product());
+    for z in 0..out_dims[2] {
+        for y in 0..out_dims[1] {
+            for x in 0..out_dims[0] {
+                let first = x * stride[0] + y * stride[1] + z * stride[2];
+                let m = (0..w)
+                    .map(|k| v[first + k * stride[axis]])
+                    .fold(f32::NEG_INFINITY, f32::max);
+                out.push(m);
+            }
+        }
     }
-    let l = axis_lipschitz(data, bmin, bmax);
-    let sum: f32 = l.iter().map(|v| v * v).sum();
-    let min = l.iter().map(|v| v * v).fold(f32::INFINITY, f32::min);
-    // A few ulps of headroom: the bound is tight and the tracer divides by it.
-    (sum + (1.0 - min).max(0.0)).sqrt() * (1.0 + 1e-6)
+    (out, out_dims)
+}
+
+/// Lipschitz bounds of a grid node over the outside (`φ ≥ 0`) and the inside (`φ ≤ 0`), from each spline
+/// patch's own control points; `level` is the node's iso-level (the function is `spline − level`).
+///
+/// On the patch of lattice cell `i` (its 4×4×4 control points, ghosts included) the partial `∂_a φ` is a
+/// quadratic-by-cubic B-spline whose control points are the patch's differences `(c_{i+1} − c_i)/h_a`, a
+/// convex combination, so `|∂_a φ| ≤ L_a`, the largest of those. Inside the box `|∇φ|² ≤ Σ L_a²`; beyond
+/// face `a` the gradient is `(±1 along a, the face patch's other partials)`, so `|∇φ|² ≤ Σ L_b² − L_a² + 1`
+/// on the patches of that face (beyond an edge or a corner, less). The patch's bound is the largest of
+/// these.
+///
+/// The value on a patch is a convex combination of its control points, so a patch whose control points
+/// all lie above the level is entirely outside, and one whose points all lie below is entirely inside:
+/// the outside bound is the largest over the patches with a control point at or above the level, the
+/// inside bound over those with one at or below (patches on the box's faces count for both: beyond the
+/// box the function grows by the distance to it, whatever the sign on the face). Sphere tracing outside
+/// needs only the outside bound (the segment from a point to the nearest surface point lies outside). For
+/// a distance field this matters: within the patches around its medial axis (the centre of a sphere)
+/// the gradient turns through every direction and the bound is `√3`, but those lie inside the shape;
+/// outside, the gradient is a unit vector turning slowly from patch to patch and the bound stays near 1.
+pub(super) fn lipschitz_sided(
+    data: &GridData,
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+    level: f32,
+) -> (f32, f32) {
+    if !data.usable() {
+        return (1.0, 1.0);
+    }
+    let (values, e) = extended_lattice(data);
+    let ext = bmax - bmin;
+    let patch_dims = data.dims.map(|n| n - 1);
+    // The patch windows of `v` (dimensions `dims`): `w[a]` entries along each axis `a`.
+    let windows = |v: Vec<f32>, dims: [usize; 3], w: [usize; 3]| {
+        let (mut m, mut d) = (v, dims);
+        for (a, &w) in w.iter().enumerate() {
+            (m, d) = window_max(&m, d, a, w);
+        }
+        debug_assert_eq!(d, patch_dims);
+        m
+    };
+    let per_axis: [Vec<f32>; 3] = std::array::from_fn(|a| {
+        let inv_h = if ext[a] > 0.0 {
+            (data.dims[a] - 1) as f32 / ext[a]
+        } else {
+            0.0
+        };
+        // |differences| along `a`; a patch reads 3 of them along `a` and 4 across.
+        let stride = [1, e[0], e[0] * e[1]][a];
+        let mut dims = e;
+        dims[a] -= 1;
+        let mut diff = Vec::with_capacity(dims.iter().product());
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                for x in 0..dims[0] {
+                    let i = x + e[0] * (y + e[1] * z);
+                    diff.push((values[i + stride] - values[i]).abs() * inv_h);
+                }
+            }
+        }
+        let mut w = [4; 3];
+        w[a] = 3;
+        windows(diff, dims, w)
+    });
+    let highest = windows(values.iter().map(|v| v - level).collect(), e, [4; 3]);
+    let lowest = windows(values.iter().map(|v| level - v).collect(), e, [4; 3]);
+    let (mut outside, mut inside) = (0.0f32, 0.0f32);
+    let mut k = 0;
+    for z in 0..patch_dims[2] {
+        for y in 0..patch_dims[1] {
+            for x in 0..patch_dims[0] {
+                let sq = per_axis.each_ref().map(|m| m[k] * m[k]);
+                let sum = sq[0] + sq[1] + sq[2];
+                // Beyond face `a` (only patches on it reach there), `±1` replaces the partial along `a`.
+                let mut bound = sum;
+                let mut on_face = false;
+                for (a, (&i, n)) in [x, y, z].iter().zip(patch_dims).enumerate() {
+                    if i == 0 || i + 1 == n {
+                        on_face = true;
+                        bound = bound.max(sum - sq[a] + 1.0);
+                    }
+                }
+                if on_face || highest[k] >= 0.0 {
+                    outside = outside.max(bound);
+                }
+                if on_face || lowest[k] >= 0.0 {
+                    inside = inside.max(bound);
+                }
+                k += 1;
+            }
+        }
+    }
+    // Both are at least 1: the face patches count for both sides, and beyond the box the function grows
+    // by the distance to it. A few ulps of headroom: the bounds are tight and the tracer divides by them.
+    let finish = |b2: f32| b2.sqrt() * (1.0 + 1e-6);
+    (finish(outside), finish(inside))
 }
 
 /// `min` over the ghost-extended 2-D lattice of one face layer: a lower bound of the spline on that face

@@ -22,7 +22,8 @@
 //! interpolates: the surface is offset by about `h²/6 ∇²φ` (`h²/(3r)` for a sphere of radius `r`), in
 //! exchange for C2 continuity. Faces use a linearly extrapolated ghost layer (no bias for linear fields);
 //! outside the box `φ = φ(clamp(x)) + |x − clamp(x)|`. The Lipschitz bound is exact for the spline's
-//! per-axis differences, `sqrt(Σ L_a² + max(0, 1 − min L_a²))`, about `√3` for a sampled distance field.
+//! per-axis differences patch by patch, `sqrt(Σ L_a² + max(0, 1 − min L_a²))`, and kept per side of the
+//! surface: near 1 outside a sampled distance field, `√3` only around its medial axis.
 
 mod bake;
 mod creases;
@@ -54,6 +55,25 @@ pub struct GridData {
     pub dims: [usize; 3],
     /// The samples, `values[(z * ny + y) * nx + x]`.
     pub values: Vec<f32>,
+}
+
+/// Lipschitz bounds of an implicit function on each side of its surface ([`Sdf::lipschitz_sided`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Lipschitz {
+    /// Bound of `|∇φ|` where `φ ≥ 0`.
+    pub outside: f32,
+    /// Bound of `|∇φ|` where `φ ≤ 0`.
+    pub inside: f32,
+}
+
+impl From<f32> for Lipschitz {
+    /// The same bound on both sides.
+    fn from(l: f32) -> Self {
+        Self {
+            outside: l,
+            inside: l,
+        }
+    }
 }
 
 /// An implicit-surface node. Parameters are [`Param`]s so that any of them can be differentiated.
@@ -356,20 +376,71 @@ impl Sdf {
     /// unions (min, max and the smooth min's convex weights keep it), the child's for a transform (the
     /// scale cancels), the spline's exact bound for a grid.
     pub fn lipschitz(&self) -> f32 {
+        let sided = self.lipschitz_sided();
+        sided.outside.max(sided.inside)
+    }
+
+    /// Lipschitz bounds of `φ` over the outside (`φ ≥ 0`) and over the inside (`φ ≤ 0`): what sphere
+    /// tracing on each side needs (the segment from a point to the nearest surface point stays on its
+    /// side). They differ for grids, whose patches around the medial axis (deep inside a shape) have
+    /// steeper splines than any near the surface ([`grid`]'s `lipschitz_sided`); for hard CSG each side
+    /// is the children's largest on the side the active child is on (min and max keep the sign of the
+    /// active child; a subtracted child's sides swap); everything else has one bound for both.
+    pub fn lipschitz_sided(&self) -> Lipschitz {
+        let max_of = |sides: &mut dyn Iterator<Item = Lipschitz>| {
+            sides.fold(
+                Lipschitz {
+                    outside: 0.0,
+                    inside: 0.0,
+                },
+                |a, b| Lipschitz {
+                    outside: a.outside.max(b.outside),
+                    inside: a.inside.max(b.inside),
+                },
+            )
+        };
+        match self {
+            Sdf::Union(children) | Sdf::Intersection(children) if !children.is_empty() => {
+                max_of(&mut children.iter().map(Sdf::lipschitz_sided))
+            }
+            Sdf::Difference(children) if !children.is_empty() => {
+                max_of(&mut children.iter().enumerate().map(|(i, c)| {
+                    let l = c.lipschitz_sided();
+                    if i == 0 {
+                        l
+                    } else {
+                        Lipschitz {
+                            outside: l.inside,
+                            inside: l.outside,
+                        }
+                    }
+                }))
+            }
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+                level,
+                ..
+            } => {
+                let (outside, inside) =
+                    grid::lipschitz_sided(data, *bbox_min, *bbox_max, level.value);
+                Lipschitz { outside, inside }
+            }
+            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.lipschitz_sided(),
+            _ => Lipschitz::from(self.lipschitz_unsided()),
+        }
+    }
+
+    /// One bound for both sides, for the nodes [`Sdf::lipschitz_sided`] does not split.
+    fn lipschitz_unsided(&self) -> f32 {
         match self {
             Sdf::Plane { normal, .. } => normal.length().max(1.0),
             Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
                 csg::max_lipschitz(children)
             }
             Sdf::SmoothUnion { children, .. } => csg::max_lipschitz(children),
-            Sdf::Transform { child, .. } => child.lipschitz(),
-            Sdf::Grid {
-                data,
-                bbox_min,
-                bbox_max,
-                ..
-            } => grid::lipschitz(data, *bbox_min, *bbox_max),
-            Sdf::Named { child, .. } => child.lipschitz(),
+            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.lipschitz(),
             _ => 1.0,
         }
     }

@@ -61,7 +61,7 @@
 //!   within the probe distance, the crossing was a graze at the noise level and is dropped.
 
 use crate::math::Ray;
-use crate::sdf::Sdf;
+use crate::sdf::{Lipschitz, Sdf};
 
 /// Tolerances of the tracer.
 ///
@@ -185,7 +185,8 @@ fn min_progress(t: f32) -> f32 {
 struct Marcher<'a> {
     sdf: &'a Sdf,
     ray: &'a Ray,
-    inv_l: f32,
+    /// Inverse Lipschitz bounds outside and inside.
+    inv_l: [f32; 2],
     t1: f32,
     settings: TraceSettings,
     /// Largest coordinate magnitude of the ray's origin: with `|t|` (the direction is a unit vector) a
@@ -197,7 +198,13 @@ struct Marcher<'a> {
 }
 
 impl<'a> Marcher<'a> {
-    fn new(sdf: &'a Sdf, lipschitz: f32, ray: &'a Ray, t1: f32, settings: &TraceSettings) -> Self {
+    fn new(
+        sdf: &'a Sdf,
+        lipschitz: Lipschitz,
+        ray: &'a Ray,
+        t1: f32,
+        settings: &TraceSettings,
+    ) -> Self {
         let settings = TraceSettings {
             eps: if settings.eps > 0.0 {
                 settings.eps
@@ -209,7 +216,7 @@ impl<'a> Marcher<'a> {
         Self {
             sdf,
             ray,
-            inv_l: inverse_lipschitz(lipschitz),
+            inv_l: [lipschitz.outside, lipschitz.inside].map(inverse_lipschitz),
             t1,
             settings,
             origin_magnitude: ray.o.abs().max_element(),
@@ -279,6 +286,8 @@ impl<'a> Marcher<'a> {
     /// immediately undo (a graze), and refines it.
     fn next_crossing(&mut self, mut from: Side) -> Crossing {
         let sign = from.sign;
+        // Marching on one side needs only that side's bound.
+        let inv_l = self.inv_l[usize::from(sign < 0.0)];
         let (mut t, mut g) = (from.t, from.g);
         // Creep step inside the `eps` zone: starts at `eps`, doubles on each consecutive creep step up to
         // `MAX_CREEP · eps`, resets when the ray leaves the zone.
@@ -291,7 +300,7 @@ impl<'a> Marcher<'a> {
             if self.steps_left == 0 {
                 return Crossing::Exhausted(t);
             }
-            let safe = g * self.inv_l;
+            let safe = g * inv_l;
             let eps = self.eps(t);
             let step = if safe >= eps {
                 creep = eps;
@@ -397,8 +406,9 @@ impl<'a> Marcher<'a> {
 /// The crossings of `sdf` along `ray` in `(t0, t1]` from [`Sdf::line_crossings`], or `None` where the
 /// marcher must decide: no closed form, a start on the surface (`|φ(t0)|` at most the on-surface level:
 /// its side is the one the ray moves into, which the marcher probes), a chord shorter than two creep
-/// steps (a graze, which the marcher may skip), a crossing on a box's rounded edge, or a closed form that
-/// disagrees with the sign of `φ(t0)`. With `first_only`, only the first crossing is wanted.
+/// steps (a graze, which the marcher may skip), a crossing on a box's rounded edge, or a start within a
+/// tolerance of a crossing where the closed form disagrees with the sign of `φ(t0)`. With `first_only`,
+/// only the first crossing is wanted.
 fn closed_form(
     sdf: &Sdf,
     ray: &Ray,
@@ -411,10 +421,6 @@ fn closed_form(
         return None;
     }
     let origin_magnitude = ray.o.abs().max_element();
-    let phi0 = sdf.eval_f32(ray.at(t0));
-    if phi0.is_nan() || phi0.abs() <= settings.on_surface_at(origin_magnitude + t0.abs()) {
-        return None;
-    }
     let line = sdf.line_crossings(ray)?;
     let t = &line.t[..line.count];
     if line.count == 2 {
@@ -423,10 +429,20 @@ fn closed_form(
             return None;
         }
     }
-    let behind = t.iter().filter(|&&t| t <= t0).count();
-    if (phi0 < 0.0) != (line.inside_before ^ (behind % 2 == 1)) {
-        return None;
+    // Only a start within a tolerance of a crossing can be on the surface or on the other side of it
+    // by rounding: only then is `φ(t0)` needed (elsewhere the crossings' parity gives the side).
+    let eps0 = settings.eps_at(origin_magnitude + t0.abs());
+    if t.iter().any(|&t| (t - t0).abs() <= eps0) {
+        let phi0 = sdf.eval_f32(ray.at(t0));
+        if phi0.is_nan() || phi0.abs() <= settings.on_surface_at(origin_magnitude + t0.abs()) {
+            return None;
+        }
+        let behind = t.iter().filter(|&&t| t <= t0).count();
+        if (phi0 < 0.0) != (line.inside_before ^ (behind % 2 == 1)) {
+            return None;
+        }
     }
+    let behind = t.iter().filter(|&&t| t <= t0).count();
     let mut found = ([0.0; 2], 0);
     for (k, &t) in t.iter().enumerate().skip(behind) {
         if t > t1 {
@@ -449,7 +465,7 @@ fn closed_form(
 /// faces of boxes, transforms of these: [`Sdf::line_crossings`]), by sphere tracing otherwise.
 pub fn first_crossing(
     sdf: &Sdf,
-    lipschitz: f32,
+    lipschitz: impl Into<Lipschitz>,
     ray: &Ray,
     t0: f32,
     t1: f32,
@@ -467,7 +483,7 @@ pub fn first_crossing(
 /// tracing otherwise.
 pub fn all_crossings_checked(
     sdf: &Sdf,
-    lipschitz: f32,
+    lipschitz: impl Into<Lipschitz>,
     ray: &Ray,
     t0: f32,
     t1: f32,
@@ -486,13 +502,13 @@ pub fn all_crossings_checked(
 /// grazes are not crossings. See the [module docs](self) for the tolerance and the step budget.
 pub fn sphere_trace(
     sdf: &Sdf,
-    lipschitz: f32,
+    lipschitz: impl Into<Lipschitz>,
     ray: &Ray,
     t0: f32,
     t1: f32,
     settings: &TraceSettings,
 ) -> ShapeTrace {
-    let mut m = Marcher::new(sdf, lipschitz, ray, t1, settings);
+    let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
     let Some(side) = m.start(t0) else {
         return ShapeTrace::Miss;
     };
@@ -510,7 +526,7 @@ pub fn sphere_trace(
 /// [`all_hits_checked`] to learn whether that happened.
 pub fn all_hits(
     sdf: &Sdf,
-    lipschitz: f32,
+    lipschitz: impl Into<Lipschitz>,
     ray: &Ray,
     t0: f32,
     t1: f32,
@@ -523,14 +539,14 @@ pub fn all_hits(
 /// complete only up to `t`). The budget `settings.max_steps` is per crossing searched.
 pub fn all_hits_checked(
     sdf: &Sdf,
-    lipschitz: f32,
+    lipschitz: impl Into<Lipschitz>,
     ray: &Ray,
     t0: f32,
     t1: f32,
     settings: &TraceSettings,
 ) -> (Vec<f32>, Option<f32>) {
     let mut hits = Vec::new();
-    let mut m = Marcher::new(sdf, lipschitz, ray, t1, settings);
+    let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
     let Some(mut side) = m.start(t0) else {
         return (hits, None);
     };
@@ -568,7 +584,7 @@ mod tests {
                 let origin = Vec3::new(0.05, 3.0, -0.1);
                 let target = Vec3::new(0.05 * k as f32 - 0.4, 0.0, 0.1);
                 let ray = Ray::new(origin, (target - origin).normalize());
-                let mut m = Marcher::new(sdf, 1.0, &ray, 10.0, &settings);
+                let mut m = Marcher::new(sdf, 1.0.into(), &ray, 10.0, &settings);
                 // A bracket [a, b] around the first crossing, `eps` wide, as the marcher produces it.
                 let t_hit = match sphere_trace(sdf, 1.0, &ray, 0.0, 10.0, &settings) {
                     ShapeTrace::Hit(t) => t,
