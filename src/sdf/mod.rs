@@ -22,8 +22,9 @@
 //! interpolates: the surface is offset by about `h²/6 ∇²φ` (`h²/(3r)` for a sphere of radius `r`), in
 //! exchange for C2 continuity. Faces use a linearly extrapolated ghost layer (no bias for linear fields);
 //! outside the box `φ = φ(clamp(x)) + |x − clamp(x)|`. The Lipschitz bound is exact for the spline's
-//! per-axis differences patch by patch, `sqrt(Σ L_a² + max(0, 1 − min L_a²))`, and kept per side of the
-//! surface: near 1 outside a sampled distance field, `√3` only around its medial axis.
+//! per-axis differences patch by patch (`sqrt(Σ L_a²)`, with 1 in place of `L_a²` beyond face `a`), and
+//! kept per side of the surface: near 1 outside a sampled convex distance field, `√3` around a medial
+//! axis.
 
 mod bake;
 mod creases;

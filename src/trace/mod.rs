@@ -21,8 +21,8 @@
 //! marching wherever the answer is certain, with the conventions below, and fall back to marching where
 //! it is not: a start on the surface (its side is the one the ray moves into, which only probing
 //! decides), a chord shorter than two creep steps (a graze, which marching may skip), a crossing on a
-//! box's rounded edge or corner, or a closed form that disagrees with the sign of `φ` at the start
-//! (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
+//! box's rounded edge or corner, or a start within a tolerance of a crossing where the closed form
+//! disagrees with the sign of `φ` there (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
 //! steps. [`sphere_trace`] and [`all_hits`] always march.
 //!
 //! # Tolerances
@@ -431,18 +431,17 @@ fn closed_form(
     }
     // Only a start within a tolerance of a crossing can be on the surface or on the other side of it
     // by rounding: only then is `φ(t0)` needed (elsewhere the crossings' parity gives the side).
+    let behind = t.iter().filter(|&&t| t <= t0).count();
     let eps0 = settings.eps_at(origin_magnitude + t0.abs());
     if t.iter().any(|&t| (t - t0).abs() <= eps0) {
         let phi0 = sdf.eval_f32(ray.at(t0));
         if phi0.is_nan() || phi0.abs() <= settings.on_surface_at(origin_magnitude + t0.abs()) {
             return None;
         }
-        let behind = t.iter().filter(|&&t| t <= t0).count();
         if (phi0 < 0.0) != (line.inside_before ^ (behind % 2 == 1)) {
             return None;
         }
     }
-    let behind = t.iter().filter(|&&t| t <= t0).count();
     let mut found = ([0.0; 2], 0);
     for (k, &t) in t.iter().enumerate().skip(behind) {
         if t > t1 {
