@@ -1,10 +1,16 @@
-//! Whole-scene transformations whose answers follow from physics, not from a reference renderer: the
-//! contact shadow under a ball does not depend on how wide the floor under it is.
+//! Whole-scene transformations whose answers follow from physics, not from a reference renderer:
+//! the contact shadow under a ball does not depend on how wide the floor under it is; scaling or
+//! rotating a whole scene changes nothing in its image (radiance is per unit area and solid angle),
+//! and scaling divides a length's derivative by the scale.
+//!
+//! Monte Carlo bounds quote two runs, `PSDR_TEST_SEED` unset and `=1` (every seed offset), as
+//! `(seed 0, seed 1)`; unless said otherwise a bound is about twice the larger.
 
 mod common;
 
-use common::deriv::scene_json;
-use implicit_psdr::integrator::{RenderOptions, render};
+use common::deriv::{assert_finite, blurred_rel_l2, diff_options, gray, rel_l2, scene_json, seed};
+use implicit_psdr::integrator::{RenderOptions, render, render_derivatives_with_boundary};
+use implicit_psdr::scene::Scene;
 
 /// The value straight below a ball of radius `r` whose centre is `D` above a floor of albedo `a` under a
 /// constant sky of radiance 1: the ball hides a cap of half-angle `asin(r/D)` around the zenith, whose
@@ -129,4 +135,297 @@ fn contact_shadow_far_from_the_origin_degrades_with_the_float_resolution() {
             "offset {offset}: {got} vs {at_origin} at the origin (predicted loss {predicted})"
         );
     }
+}
+
+/// A mean of absolute differences relative to the reference's: `Σ|a − b| / Σ|b|`.
+fn rel_mad(a: &[f64], b: &[f64]) -> f64 {
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum();
+    let den: f64 = b.iter().map(|y| y.abs()).sum();
+    num / den.max(1e-30)
+}
+
+/// `[x, y, z]` times `s`, as scene JSON.
+fn scaled(p: [f32; 3], s: f32) -> String {
+    format!("[{}, {}, {}]", p[0] * s, p[1] * s, p[2] * s)
+}
+
+/// A ball on a slab under a tilted rectangle light and a dim sky, 16×16 pixels, every position and
+/// length times `s` (radiances unchanged); the slab's edges rounded by `rounding` (before scaling).
+fn ball_on_a_slab(s: f32, rounding: f32) -> Scene {
+    scene_json(&format!(
+        r#"{{"camera": {{"origin": {eye}, "target": {look}, "up": [0, 1, 0], "fov_y": 35,
+              "width": 16, "height": 16, "filter": "tent"}},
+            "integrator": {{"type": "direct"}},
+            "shapes": [
+              {{"name": "ball", "sdf": {{"type": "sphere", "center": {ball}, "radius": {radius}}},
+               "bsdf": {{"type": "diffuse", "albedo": [0.7, 0.7, 0.7]}}}},
+              {{"name": "slab", "sdf": {{"type": "box", "center": {slab}, "half_size": {half},
+                 "rounding": {rounding}}}, "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
+            "emitters": [
+              {{"name": "light", "type": "rectangle", "center": {light}, "normal": [-0.3, -1, -0.2],
+               "u": [1, 0, 0], "size": [{w}, {h}], "radiance": [20, 20, 20]}},
+              {{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}}]}}"#,
+        eye = scaled([0.3, 1.6, 3.2], s),
+        look = scaled([0.0, 0.35, 0.0], s),
+        ball = scaled([0.1, 0.55, 0.0], s),
+        radius = 0.5 * s,
+        slab = scaled([0.0, -0.1, 0.0], s),
+        half = scaled([1.6, 0.1, 1.6], s),
+        rounding = rounding * s,
+        light = scaled([1.2, 3.0, 0.8], s),
+        w = 0.8 * s,
+        h = 0.6 * s,
+    ))
+}
+
+/// The lengths whose derivatives [`at_scale`] takes: one of a shape, one of an emitter.
+const LENGTHS: [&str; 2] = ["ball.radius", "light.center.x"];
+
+/// One scale's grey image, the complete derivatives (interior, primary and secondary terms) of
+/// [`LENGTHS`] times `s` (which undoes their `1/s`), and the rays that ran out of steps in all
+/// passes.
+fn at_scale(s: f32, rounding: f32, seed: u64) -> (Vec<f64>, Vec<Vec<f64>>, u64) {
+    let mut scene = ball_on_a_slab(s, rounding);
+    scene.select_parameters(&LENGTHS.map(String::from)).unwrap();
+    // The image of a derivative pass is the primal render's at the same seed and spp.
+    let out = render_derivatives_with_boundary(
+        &scene,
+        LENGTHS.len(),
+        &diff_options(64, seed),
+        20_000,
+        80_000,
+    )
+    .unwrap();
+    assert_finite(&out, &format!("scale {s}"));
+    let derivatives = out
+        .total()
+        .iter()
+        .map(|d| gray(d).iter().map(|v| v * s as f64).collect())
+        .collect();
+    (gray(&out.image), derivatives, out.stats.exhausted_rays)
+}
+
+/// Scaling a whole scene by `s` (camera, shapes, light; radiance is per unit area and solid angle,
+/// so unchanged) leaves its image unchanged, and `s · ∂I/∂ℓ` of a length `ℓ` too, at the same seed:
+/// the same samples see the same points, only rounded differently, since every tracing tolerance is
+/// relative to the shapes' sizes and the coordinates' magnitude. The slab has sharp edges: with
+/// rounded ones the derivative pass runs rays out of steps at every scale
+/// ([`tangent_lines_along_a_rounded_edge_do_not_run_out_of_steps`]).
+///
+/// Measured against `s = 1` at the same seed, for `s` = 10⁻³, 10⁻², 10², 10³: image mean abs
+/// difference (3.7e-8 to 7.3e-8, 3.0e-8 to 6.4e-8) of the mean; relative L2 of
+/// `s · ∂I/∂ball.radius` (8.6e-6 to 1.6e-5, 1.3e-6 to 7.1e-6), of `s · ∂I/∂light.center.x`
+/// (2.5e-7 to 5.7e-7, 2.5e-7 to 5.9e-7); no ray out of steps in any pass. That is rounding: two
+/// seeds at scale 1 differ by (5.2%, 5.0%) in the image and (0.35, 0.43) and (0.20, 0.18) in the derivatives. A
+/// sample may still change sides of an edge by rounding alone (none did); the bounds allow a
+/// handful (one camera sample moves a pixel by about 1.5e-4 of the image) and stay 50 times (image)
+/// and 18 times (derivatives) below the seed-to-seed noise, the least a tolerance tied to absolute
+/// lengths would cause at these scales.
+#[test]
+fn scaling_the_whole_scene_changes_neither_the_image_nor_the_scaled_derivatives() {
+    let (image, derivatives, exhausted) = at_scale(1.0, 0.0, seed(31));
+    assert_eq!(exhausted, 0, "s = 1: {exhausted} rays ran out of steps");
+    let (other, other_derivatives, _) = at_scale(1.0, 0.0, seed(32));
+    println!(
+        "s = 1, another seed: image {:.2e}, derivatives {:.3} {:.3}",
+        rel_mad(&other, &image),
+        rel_l2(&other_derivatives[0], &derivatives[0], None),
+        rel_l2(&other_derivatives[1], &derivatives[1], None)
+    );
+    for s in [1e-3f32, 1e-2, 1e2, 1e3] {
+        let (got, got_derivatives, exhausted) = at_scale(s, 0.0, seed(31));
+        assert_eq!(exhausted, 0, "s = {s}: {exhausted} rays ran out of steps");
+        let e = rel_mad(&got, &image);
+        println!("s = {s:e}: image {e:.2e}");
+        assert!(e <= 1e-3, "s = {s}: image differs by {e} of the mean");
+        for (k, name) in LENGTHS.iter().enumerate() {
+            let e = rel_l2(&got_derivatives[k], &derivatives[k], None);
+            println!("  s · d/d {name}: rel L2 {e:.2e}");
+            assert!(e <= 1e-2, "s = {s}: s · d/d {name} differs by {e} (rel L2)");
+        }
+    }
+}
+
+/// The derivative pass of
+/// [`scaling_the_whole_scene_changes_neither_the_image_nor_the_scaled_derivatives`] with the slab's
+/// edges rounded by 0.02 runs no ray out of steps. It does: the shadow term's tangent lines on the
+/// rounded edges, those nearly along an edge, start a few tolerances off the surface and stay that
+/// close to it for much of the edge's length, where sphere tracing's steps grow only quadratically
+/// with the distance travelled (2,000 steps and more). Measured: (65, 49) rays out of steps for
+/// 80,000 boundary samples, the same counts at every scale (the image has none); 313 of 18,158
+/// lines tangent to the slab at uniform angles (1.7%), all nearly along an edge; in the scene of
+/// [`rotating_the_whole_scene_changes_the_image_only_within_the_noise`] with its rounded cube
+/// (edges 0.5 long, rounding 0.05), 434 for 160,000 samples. An exhausted line counts as a miss.
+#[test]
+#[ignore = "bug: shadow-term tangent lines along a rounded box edge run out of sphere-tracing steps"]
+fn tangent_lines_along_a_rounded_edge_do_not_run_out_of_steps() {
+    let (_, _, exhausted) = at_scale(1.0, 0.02, seed(31));
+    assert_eq!(exhausted, 0, "{exhausted} rays ran out of steps");
+}
+
+/// A ball (and, with `cube`, a rounded cube) on a slab under a tilted rectangle light and a dim
+/// sky, 16×16 pixels, the whole scene rotated by `angle` degrees about the axis (1, 2, 3): points
+/// and directions of the camera, sphere and light turned by the rotation, the boxes wrapped in
+/// `transform` nodes (none at 0°).
+fn turned_scene(angle: f32, integrator: &str, cube: bool) -> Scene {
+    let q = glam::Quat::from_axis_angle(
+        glam::Vec3::new(1.0, 2.0, 3.0).normalize(),
+        angle.to_radians(),
+    );
+    let turn = |p: [f32; 3]| {
+        let v = q * glam::Vec3::from(p);
+        format!("[{}, {}, {}]", v.x, v.y, v.z)
+    };
+    let turned = |node: &str| {
+        if angle == 0.0 {
+            node.to_string()
+        } else {
+            format!(
+                r#"{{"type": "transform", "rotate": {{"axis": [1, 2, 3], "angle": {angle}}}, "child": {node}}}"#
+            )
+        }
+    };
+    scene_json(&format!(
+        r#"{{"camera": {{"origin": {eye}, "target": {look}, "up": {up}, "fov_y": 40,
+              "width": 16, "height": 16, "filter": "tent"}},
+            "integrator": {{"type": "{integrator}"}},
+            "shapes": [
+              {{"name": "ball", "sdf": {{"type": "sphere", "center": {ball}, "radius": 0.5}},
+               "bsdf": {{"type": "diffuse", "albedo": [0.7, 0.7, 0.7]}}}},
+              {cube}
+              {{"name": "slab", "sdf": {slab}, "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
+            "emitters": [
+              {{"name": "light", "type": "rectangle", "center": {light}, "normal": {normal}, "u": {u},
+               "size": [0.8, 0.6], "radiance": [20, 20, 20]}},
+              {{"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}}]}}"#,
+        eye = turn([0.3, 1.8, 3.4]),
+        look = turn([-0.2, 0.35, 0.0]),
+        up = turn([0.0, 1.0, 0.0]),
+        ball = turn([0.1, 0.55, 0.0]),
+        cube = if cube {
+            format!(
+                r#"{{"name": "cube", "sdf": {}, "bsdf": {{"type": "diffuse", "albedo": [0.6, 0.6, 0.6]}}}},"#,
+                turned(
+                    r#"{"type": "box", "center": [-0.8, 0.25, 0.4], "half_size": [0.25, 0.25, 0.25], "rounding": 0.05}"#
+                )
+            )
+        } else {
+            String::new()
+        },
+        slab = turned(r#"{"type": "box", "center": [0, -0.1, 0], "half_size": [1.6, 0.1, 1.6]}"#),
+        light = turn([1.2, 3.0, 0.8]),
+        normal = turn([-0.3, -1.0, -0.2]),
+        u = turn([1.0, 0.0, 0.0]),
+    ))
+}
+
+/// The grey image of `scene` and its rays out of steps.
+fn image_of(scene: &Scene, spp: u32, seed: u64) -> (Vec<f64>, u64) {
+    let (image, stats) = render(
+        scene,
+        &RenderOptions {
+            spp,
+            seed,
+            ..RenderOptions::default()
+        },
+    );
+    (gray(&image), stats.exhausted_rays)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// The standard deviation of the difference of two images' means, from two independent renders `a`
+/// and `b` of one scene: `√Σ(a − b)² / N`.
+fn sigma_of_mean_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+        / a.len() as f64
+}
+
+/// Rotating a whole scene (37° about (1, 2, 3); a slab and a rounded cube turned by `transform`
+/// nodes, the sphere's centre, the light's centre, normal and `u`, the camera's eye, target and up
+/// turned with them) leaves its image unchanged within the noise, with `direct` and `path`, and the
+/// complete derivative of a ball's radius (a rotation-invariant parameter) too. At one seed the
+/// camera samples and the rectangle light's are shared; the sky's (uniform over world directions)
+/// and the BSDF's (in a frame built from the normal's coordinates) are not, so a rotated image
+/// differs from the unrotated one by part of the noise.
+///
+/// Measured (16×16, 1024 spp): mean abs difference to the unrotated image at the same seed, as a
+/// share of the one between two seeds, `direct` (0.34, 0.31), `path` (0.23, 0.21) (bound 0.7); the
+/// image means differ by (0.39, 0.06) and (0.03, 0.04) standard deviations of a difference of means
+/// (bound 3). The derivative (64 spp, 40,000 + 160,000 boundary samples; the cube left out, see
+/// [`tangent_lines_along_a_rounded_edge_do_not_run_out_of_steps`]): blurred relative L2 to the
+/// unrotated one (0.030, 0.025) against (0.130, 0.080) between seeds (bound 0.7 of it); image sums
+/// rotated −14.86, unrotated −14.01, unrotated at the other seed −9.80 (seed 1: −9.61, −9.44,
+/// −11.30). No ray out of steps.
+#[test]
+fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
+    for integrator in ["direct", "path"] {
+        let spp = 1024;
+        let plain = turned_scene(0.0, integrator, true);
+        let turned = turned_scene(37.0, integrator, true);
+        let (a, ea) = image_of(&plain, spp, seed(41));
+        let (b, eb) = image_of(&plain, spp, seed(42));
+        let (r, er) = image_of(&turned, spp, seed(41));
+        assert_eq!(
+            (ea, eb, er),
+            (0, 0, 0),
+            "{integrator}: rays ran out of steps"
+        );
+        let noise = rel_mad(&b, &a);
+        let turned_diff = rel_mad(&r, &a);
+        let sigma = sigma_of_mean_difference(&a, &b);
+        let mean_diff = mean(&r) - mean(&a);
+        println!(
+            "{integrator}: mean abs difference {turned_diff:.4} (seed to seed {noise:.4}, ratio {:.2}); \
+             difference of means {mean_diff:.2e} = {:.2} σ",
+            turned_diff / noise,
+            mean_diff / sigma
+        );
+        assert!(
+            turned_diff <= 0.7 * noise,
+            "{integrator}: rotated image differs by {turned_diff} (seed to seed {noise})"
+        );
+        assert!(
+            mean_diff.abs() <= 3.0 * sigma,
+            "{integrator}: image means differ by {mean_diff} (σ {sigma})"
+        );
+    }
+    let derivative = |angle: f32, seed: u64| {
+        let mut scene = turned_scene(angle, "direct", false);
+        scene
+            .select_parameters(&["ball.radius".to_string()])
+            .unwrap();
+        let out =
+            render_derivatives_with_boundary(&scene, 1, &diff_options(64, seed), 40_000, 160_000)
+                .unwrap();
+        assert_finite(&out, &format!("{angle}°"));
+        assert_eq!(
+            out.stats.exhausted_rays, 0,
+            "{angle}°: rays ran out of steps"
+        );
+        gray(&out.total()[0])
+    };
+    let a = derivative(0.0, seed(41));
+    let b = derivative(0.0, seed(42));
+    let r = derivative(37.0, seed(41));
+    let noise = blurred_rel_l2(&b, &a, 16, 16, None);
+    let turned_diff = blurred_rel_l2(&r, &a, 16, 16, None);
+    let sum = |v: &[f64]| v.iter().sum::<f64>();
+    println!(
+        "d/d ball.radius: blurred rel L2 {turned_diff:.4} (seed to seed {noise:.4}); sums {:.3} {:.3} \
+         (other seed {:.3})",
+        sum(&r),
+        sum(&a),
+        sum(&b)
+    );
+    assert!(
+        turned_diff <= 0.7 * noise,
+        "d/d ball.radius rotated differs by {turned_diff} (seed to seed {noise})"
+    );
 }
