@@ -1,7 +1,8 @@
 //! Whole-scene transformations whose answers follow from physics, not from a reference renderer:
 //! the contact shadow under a ball does not depend on how wide the floor under it is; scaling or
 //! rotating a whole scene changes nothing in its image (radiance is per unit area and solid angle),
-//! and scaling divides a length's derivative by the scale.
+//! and scaling divides a length's derivative by the scale; a closed room lit from outside is black
+//! inside.
 //!
 //! Monte Carlo bounds quote two runs, `PSDR_TEST_SEED` unset and `=1` (every seed offset), as
 //! `(seed 0, seed 1)`; unless said otherwise a bound is about twice the larger.
@@ -428,4 +429,193 @@ fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
         turned_diff <= 0.7 * noise,
         "d/d ball.radius rotated differs by {turned_diff} (seed to seed {noise})"
     );
+}
+
+/// A room (`room`: an sdf node around the origin, at least 1.6 from it in every direction) with a
+/// ball inside, lit only from outside: a rectangle light 4.5 above the origin facing down and a
+/// white sky. 16×16 pixels at 90°, the camera at `eye` looking at `look`.
+fn room_scene(room: &str, integrator: &str, eye: [f32; 3], look: [f32; 3]) -> Scene {
+    scene_json(&format!(
+        r#"{{"camera": {{"origin": {eye:?}, "target": {look:?}, "up": [0, 1, 0], "fov_y": 90,
+              "width": 16, "height": 16, "filter": "tent"}},
+            "integrator": {integrator},
+            "shapes": [
+              {{"name": "room", "sdf": {room}, "bsdf": {{"type": "diffuse", "albedo": [0.9, 0.9, 0.9]}}}},
+              {{"name": "ball", "sdf": {{"type": "sphere", "center": [0.5, -0.6, -0.5], "radius": 0.4}},
+               "bsdf": {{"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}}}],
+            "emitters": [
+              {{"name": "light", "type": "rectangle", "center": [0.3, 4.5, 0.2], "normal": [0, -1, 0],
+               "u": [1, 0, 0], "size": [1, 1], "radiance": [50, 50, 50]}},
+              {{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#
+    ))
+}
+
+const DIRECT: &str = r#"{"type": "direct"}"#;
+const PATH: &str = r#"{"type": "path", "max_depth": 8}"#;
+
+/// Renders `room` from inside at 256 spp (seed 1) and returns the count of non-zero channel values,
+/// the largest, and the rays out of steps; checks that the same room seen from outside is lit (so
+/// black inside is not the scene's fault).
+fn inside_the_room(room: &str, integrator: &str) -> (usize, f32, u64) {
+    let outside = room_scene(room, integrator, [0.3, 4.0, 7.0], [0.0; 3]);
+    let (image, _) = render(
+        &outside,
+        &RenderOptions {
+            spp: 4,
+            seed: 1,
+            ..RenderOptions::default()
+        },
+    );
+    assert!(
+        image.rgb.iter().all(|v| *v > 0.0),
+        "{room}: the room seen from outside has black pixels"
+    );
+    let inside = room_scene(room, integrator, [0.3, 0.2, 1.2], [-0.5, -0.3, -1.0]);
+    let (image, stats) = render(
+        &inside,
+        &RenderOptions {
+            spp: 256,
+            seed: 1,
+            ..RenderOptions::default()
+        },
+    );
+    let lit = image.rgb.iter().filter(|v| **v != 0.0).count();
+    let max = image.rgb.iter().copied().fold(0.0f32, f32::max);
+    (lit, max, stats.exhausted_rays)
+}
+
+/// A closed room lit only from outside is black inside: every channel of every pixel exactly 0,
+/// with `direct` and with `path` (8 bounces), for a camera inside a solid sphere (it sees the
+/// sphere's inner side: the tracer reports the exit), inside the cavity of a spherical shell (a
+/// `difference`), and inside the same shell turned by a `transform`. Anything that lets one ray
+/// through a wall (a graze dropped, a shadow ray starting on the wrong side, a ray out of steps
+/// counted as escaping) shows as a non-zero value, however rare: the sky's radiance is 1 and the
+/// light's 50, so one leaking sample adds at least ~1e-5 to a pixel, and the same rooms seen from
+/// outside are lit everywhere. Measured: 0 non-zero values, 0 rays out of steps (an earlier layout,
+/// with `path`: none in 8 other seeds either). Box rooms leak:
+/// [`a_box_room_with_marched_walls_lit_from_outside_is_black`],
+/// [`a_sharp_box_room_lit_from_outside_is_black`].
+#[test]
+fn a_closed_room_lit_from_outside_is_black() {
+    let shell = r#"{"type": "difference", "children": [
+        {"type": "sphere", "center": [0, 0, 0], "radius": 2.1},
+        {"type": "sphere", "center": [0, 0, 0], "radius": 1.9}]}"#;
+    let rooms = [
+        (
+            "solid sphere",
+            r#"{"type": "sphere", "center": [0, 0, 0], "radius": 2}"#.to_string(),
+        ),
+        ("spherical shell", shell.to_string()),
+        (
+            "turned spherical shell",
+            format!(
+                r#"{{"type": "transform", "rotate": {{"axis": [1, 2, 3], "angle": 37}}, "child": {shell}}}"#
+            ),
+        ),
+    ];
+    for (name, room) in &rooms {
+        for integrator in [DIRECT, PATH] {
+            let (lit, max, exhausted) = inside_the_room(room, integrator);
+            println!(
+                "{name} {integrator}: {lit} non-zero values (max {max}), {exhausted} exhausted"
+            );
+            assert_eq!(exhausted, 0, "{name}, {integrator}: rays ran out of steps");
+            assert_eq!(
+                lit, 0,
+                "{name}, {integrator}: {lit} channel values are not 0 (max {max})"
+            );
+        }
+    }
+}
+
+/// [`a_closed_room_lit_from_outside_is_black`] for box rooms whose walls are marched (a rounded
+/// box, a `difference` of two boxes): a next-event ray to the sky that leaves a wall nearly
+/// parallel to it (0.01–0.04° off) runs along that wall inside the room, where sphere tracing's
+/// steps grow only by a factor `1 + sin θ` each: it runs out of steps, counts as unoccluded, and
+/// the sky leaks in. Measured (16×16, 256 spp, seed 1): solid rounded box (half size 2, 1.5, 2.5,
+/// rounding 0.3), `direct` 12 rays out of steps and 36 non-zero values (up to 3.4e-5), `path` 72
+/// and 183 (up to 5.9e-5); shell of two boxes, `direct` 13 and 39, `path` 100 and 225 (up to
+/// 1.2e-3).
+#[test]
+#[ignore = "bug: rays grazing a wall inside a room run out of steps and count as escaping, so the sky leaks in"]
+fn a_box_room_with_marched_walls_lit_from_outside_is_black() {
+    let rooms = [
+        (
+            "solid rounded box",
+            r#"{"type": "box", "center": [0, 0, 0], "half_size": [2, 1.5, 2.5], "rounding": 0.3}"#,
+        ),
+        (
+            "shell of two boxes",
+            r#"{"type": "difference", "children": [
+                {"type": "box", "center": [0, 0, 0], "half_size": [2.2, 1.7, 2.7], "rounding": 0.3},
+                {"type": "box", "center": [0, 0, 0], "half_size": [2, 1.5, 2.5], "rounding": 0.1}]}"#,
+        ),
+    ];
+    let mut leaks = Vec::new();
+    for (name, room) in rooms {
+        for integrator in [DIRECT, PATH] {
+            let (lit, max, exhausted) = inside_the_room(room, integrator);
+            println!(
+                "{name} {integrator}: {lit} non-zero values (max {max}), {exhausted} exhausted"
+            );
+            if lit > 0 || exhausted > 0 {
+                leaks.push(format!(
+                    "{name}, {integrator}: {lit} non-zero values (max {max}), {exhausted} rays out of steps"
+                ));
+            }
+        }
+    }
+    assert!(leaks.is_empty(), "{}", leaks.join("; "));
+}
+
+/// [`a_closed_room_lit_from_outside_is_black`] for a sharp box room, traced in closed form (no ray
+/// runs out of steps): a path vertex that lands on a wall within the box's on-surface tolerance
+/// (3e-6 here) of an edge continues, in the room, towards the neighbouring wall; its origin, pushed
+/// off the wall it hit, is still "on" the neighbouring wall, so the tracer decides that the ray
+/// leaves through that wall, reports no crossing, and the path escapes to the sky. Measured with
+/// `path` (16×16, 256 spp): the box turned 37° about (1, 2, 3), seeds 1 to 8: 0, 0, 0, 3, 0, 6, 0,
+/// 3 non-zero values, no ray out of steps (one leaking sample, in an earlier layout, carried 0.57);
+/// the unturned box, none in these seeds. The ray itself: from the wall `z = 2.5`, 3e-6 below the
+/// ceiling `y = 1.5`, into the room and up at 7.8°, it reports no hit (1e-6 to 3e-6 below: no hit;
+/// 5e-6 and more: the ceiling, 3.7e-5 away).
+#[test]
+#[ignore = "bug: a ray leaving a box room's wall next to an edge passes through the neighbouring wall"]
+fn a_sharp_box_room_lit_from_outside_is_black() {
+    let room = r#"{"type": "transform", "rotate": {"axis": [1, 2, 3], "angle": 37},
+        "child": {"type": "box", "center": [0, 0, 0], "half_size": [2, 1.5, 2.5]}}"#;
+    let scene = room_scene(room, PATH, [0.3, 0.2, 1.2], [-0.5, -0.3, -1.0]);
+    let mut leaks = Vec::new();
+    for seed in 1..=8 {
+        let (image, stats) = render(
+            &scene,
+            &RenderOptions {
+                spp: 256,
+                seed,
+                ..RenderOptions::default()
+            },
+        );
+        let lit = image.rgb.iter().filter(|v| **v != 0.0).count();
+        println!(
+            "seed {seed}: {lit} non-zero values, {} exhausted",
+            stats.exhausted_rays
+        );
+        if lit > 0 || stats.exhausted_rays > 0 {
+            leaks.push(format!(
+                "seed {seed}: {lit} non-zero values, {} rays out of steps",
+                stats.exhausted_rays
+            ));
+        }
+    }
+    assert!(leaks.is_empty(), "{}", leaks.join("; "));
+    let room = r#"{"type": "box", "center": [0, 0, 0], "half_size": [2, 1.5, 2.5]}"#;
+    let scene = room_scene(room, PATH, [0.3, 0.2, 1.2], [-0.5, -0.3, -1.0]);
+    let p = glam::Vec3::new(0.11, 1.5 - 3e-6, 2.5);
+    let d = glam::Vec3::new(0.686, 0.135, -0.715).normalize();
+    let ray = implicit_psdr::math::Ray::new(scene.offset_origin(p, glam::Vec3::Z, d), d);
+    match scene.intersect(&ray, f32::INFINITY) {
+        implicit_psdr::scene::Intersection::Hit(h) => {
+            assert!((h.p.y - 1.5).abs() < 1e-5, "hit {:?}, not the ceiling", h.p)
+        }
+        other => panic!("a ray inside the room next to its edge: {other:?}"),
+    }
 }
