@@ -1,8 +1,9 @@
-//! Whole-scene transformations whose answers follow from physics, not from a reference renderer:
-//! the contact shadow under a ball does not depend on how wide the floor under it is; scaling or
-//! rotating a whole scene changes nothing in its image (radiance is per unit area and solid angle),
-//! and scaling divides a length's derivative by the scale; a closed room lit from outside is black
-//! inside.
+//! Whole-scene transformations and extreme cameras whose answers follow from physics, not from a
+//! reference renderer: the contact shadow under a ball does not depend on how wide the floor under it
+//! is; scaling or rotating a whole scene changes nothing in its image (radiance is per unit area and
+//! solid angle), and scaling divides a length's derivative by the scale; a closed room lit from outside
+//! is black inside; at 0.01° and at 170° a silhouette's derivative matches finite differences and the
+//! closed form of the edge's motion.
 //!
 //! Monte Carlo bounds quote two runs, `PSDR_TEST_SEED` unset and `=1` (every seed offset), as
 //! `(seed 0, seed 1)`; unless said otherwise a bound is about twice the larger.
@@ -10,6 +11,7 @@
 mod common;
 
 use common::deriv::{assert_finite, blurred_rel_l2, diff_options, gray, rel_l2, scene_json, seed};
+use implicit_psdr::integrator::fd::render_with_difference;
 use implicit_psdr::integrator::{RenderOptions, render, render_derivatives_with_boundary};
 use implicit_psdr::scene::Scene;
 
@@ -618,4 +620,307 @@ fn a_sharp_box_room_lit_from_outside_is_black() {
         }
         other => panic!("a ray inside the room next to its edge: {other:?}"),
     }
+}
+
+/// A unit sphere at the origin (albedo ρ = 0.5) under a white sky (L = 1), seen on a square film of
+/// `size` pixels at `fov` degrees by a camera at `(0, 0, d)` aimed at the point of its silhouette
+/// on the `+x` side, `(√(1 − 1/d²), 0, 1/d)`: the silhouette passes through the film's centre,
+/// vertically, the sphere to its left.
+fn silhouette_view(fov: f32, size: u32, d: f32) -> Scene {
+    let aim = [(1.0 - 1.0 / (d * d)).sqrt(), 0.0, 1.0 / d];
+    scene_json(&format!(
+        r#"{{"camera": {{"origin": [0, 0, {d}], "target": {aim:?}, "up": [0, 1, 0], "fov_y": {fov},
+              "width": {size}, "height": {size}, "filter": "tent"}},
+            "integrator": {{"type": "direct"}},
+            "shapes": [{{"name": "ball", "sdf": {{"type": "sphere", "center": [0, 0, 0], "radius": 1}},
+               "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
+            "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#
+    ))
+}
+
+/// The two geometric parameters of [`silhouette_view`]'s sphere.
+const SILHOUETTE_PARAMETERS: [&str; 2] = ["ball.center.x", "ball.radius"];
+
+/// The focal length in pixels of a film `size` pixels high at `fov` degrees.
+fn focal_px(fov: f64, size: u32) -> f64 {
+    0.5 * size as f64 / (0.5 * fov).to_radians().tan()
+}
+
+/// The image sum (pixels and channels) of the derivative of [`silhouette_view`] with respect to
+/// [`SILHOUETTE_PARAMETERS`] when the film is so narrow that it sees a straight piece of
+/// silhouette: a sphere of radius 1 seen from distance `d` has the angular radius `α = asin(1/d)`;
+/// moving its centre sideways turns its direction by `1/d` per unit, growing its radius widens `α`
+/// by `1/(d cos α)`; the edge crosses the film's `size` rows moving `f` times that many pixels, and
+/// turns background (L) into sphere (ρL) in each of the three channels: `3 (ρ − 1) L · size · f ·
+/// ω`. The pixel filter's translates sum to 1 (the tent of every row integrates to 1).
+fn straight_edge_sums(fov: f64, size: u32, d: f64) -> [f64; 2] {
+    let f = focal_px(fov, size);
+    let jump = 3.0 * (0.5 - 1.0);
+    let cos_a = (1.0 - 1.0 / (d * d)).sqrt();
+    [
+        jump * size as f64 * f / d,
+        jump * size as f64 * f / (d * cos_a),
+    ]
+}
+
+/// The same sums when the whole silhouette is on the film, well inside it: `3 (ρ − 1) L dA/dπ` with
+/// `A` the area (pixels²) of the sphere's image, an ellipse: for angular radius `α` and angle `γ`
+/// between the sphere's direction and the optical axis, `A = π f² sin²α cos α / (cos²γ −
+/// sin²α)^{3/2}`. Aimed at the silhouette, `γ = α`; moving the centre along `x` turns it towards
+/// the axis (`dγ = −dx/d`), growing the radius widens `α` (`dα = dr / (d cos α)`).
+fn ellipse_sums(fov: f64, size: u32, d: f64) -> [f64; 2] {
+    let f = focal_px(fov, size);
+    let area = |a: f64, g: f64| {
+        std::f64::consts::PI * f * f * a.sin().powi(2) * a.cos()
+            / (g.cos().powi(2) - a.sin().powi(2)).powf(1.5)
+    };
+    let a = (1.0 / d).asin();
+    let h = 1e-6;
+    let da = (area(a + h, a) - area(a - h, a)) / (2.0 * h);
+    let dg = (area(a, a + h) - area(a, a - h)) / (2.0 * h);
+    let jump = 3.0 * (0.5 - 1.0);
+    [jump * dg * (-1.0 / d), jump * da / (d * a.cos())]
+}
+
+/// Where the silhouette is on the film's middle row: the largest film `x` (pixels, to 0.001) within
+/// two pixels of the centre whose camera ray hits the sphere (the sphere is on the left).
+fn traced_edge(scene: &Scene) -> f32 {
+    let frame = scene.camera.frame::<f32>();
+    let (cx, cy) = (
+        0.5 * scene.camera.width as f32,
+        0.5 * scene.camera.height as f32,
+    );
+    (0..=4000)
+        .map(|k| cx - 2.0 + 0.001 * k as f32)
+        .filter(|&x| {
+            let ray = frame.generate_ray(glam::Vec2::new(x, cy));
+            matches!(
+                scene.intersect(&ray, f32::INFINITY),
+                implicit_psdr::scene::Intersection::Hit(_)
+            )
+        })
+        .fold(f32::NEG_INFINITY, f32::max)
+}
+
+/// Budgets and bounds of one silhouette check.
+struct SilhouetteCheck {
+    spp: u32,
+    primary: u64,
+    secondary: u64,
+    fd_spp: u32,
+    /// Finite-difference step (both parameters).
+    h: f32,
+    /// Bound on `|Σ diff − Σ fd| / |Σ fd|`.
+    sum_fd: f64,
+    /// Bound on `|Σ diff − closed form| / |closed form|`.
+    sum_closed: f64,
+    /// Bound on `|Σ fd − closed form| / |closed form|`.
+    fd_sum: f64,
+    /// Bound on the blurred relative L2 of the derivative against FD.
+    l2: f64,
+}
+
+/// Checks [`SILHOUETTE_PARAMETERS`]' complete derivatives on `scene` (one pass, every term finite,
+/// no ray out of steps) against central finite differences with common random numbers (no ray out
+/// of steps in their renders either) and against the closed-form image sums `expected`; the
+/// silhouette's traced position on the middle row within 0.05 px of the film's centre, where it is.
+fn check_silhouette(
+    label: &str,
+    scene: &Scene,
+    expected: [f64; 2],
+    c: &SilhouetteCheck,
+    base: u64,
+) {
+    let size = scene.camera.width as usize;
+    let edge = traced_edge(scene) - 0.5 * size as f32;
+    println!("{label}: traced silhouette {edge:+.3} px from the exact one");
+    let mut scene = scene.clone();
+    scene
+        .select_parameters(&SILHOUETTE_PARAMETERS.map(String::from))
+        .unwrap();
+    let out = render_derivatives_with_boundary(
+        &scene,
+        SILHOUETTE_PARAMETERS.len(),
+        &diff_options(c.spp, seed(base)),
+        c.primary,
+        c.secondary,
+    )
+    .unwrap();
+    assert_finite(&out, label);
+    assert_eq!(
+        out.stats.exhausted_rays, 0,
+        "{label}: rays ran out of steps"
+    );
+    let sum = |v: &[f64]| v.iter().sum::<f64>();
+    for (k, name) in SILHOUETTE_PARAMETERS.iter().enumerate() {
+        let total = gray(&out.total()[k]);
+        let interior = gray(&out.interior[k]);
+        let reference = render_with_difference(
+            &scene,
+            name,
+            Some(c.h),
+            &RenderOptions {
+                spp: c.fd_spp,
+                seed: seed(base + 500),
+                ..RenderOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            reference.stats.exhausted_rays, 0,
+            "{label} {name}: FD rays ran out of steps"
+        );
+        let f = gray(&reference.derivative);
+        assert!(
+            f.iter().all(|v| v.is_finite()),
+            "{label} {name}: FD not finite"
+        );
+        let (st, sf, want) = (sum(&total), sum(&f), expected[k]);
+        let e_fd = (st - sf).abs() / sf.abs();
+        let e_cf = (st - want).abs() / want.abs();
+        let e_fd_cf = (sf - want).abs() / want.abs();
+        let e_interior = (sum(&interior) - sf).abs() / sf.abs();
+        let l2 = blurred_rel_l2(&total, &f, size, size, None);
+        println!(
+            "{label} {name}: Σ {st:.5e} (interior {:.4e} primary {:.4e} secondary {:.4e}), FD {sf:.5e}, \
+             closed form {want:.5e}: vs FD {e_fd:.4}, vs closed form {e_cf:.4}, FD vs closed form \
+             {e_fd_cf:.4}, interior alone vs FD {e_interior:.3}; blurred rel L2 {l2:.4}",
+            sum(&interior),
+            sum(&gray(&out.primary[k])),
+            sum(&gray(&out.secondary[k])),
+        );
+        assert!(
+            e_fd <= c.sum_fd,
+            "{label} {name}: Σ {st} vs FD {sf} ({e_fd})"
+        );
+        assert!(
+            e_cf <= c.sum_closed,
+            "{label} {name}: Σ {st} vs closed form {want} ({e_cf})"
+        );
+        assert!(
+            e_fd_cf <= c.fd_sum,
+            "{label} {name}: FD {sf} vs closed form {want} ({e_fd_cf})"
+        );
+        assert!(l2 <= c.l2, "{label} {name}: blurred rel L2 {l2}");
+        // The boundary term matters: without it the sum misses by about half.
+        assert!(
+            e_interior > 4.0 * c.sum_fd,
+            "{label} {name}: interior alone {e_interior}"
+        );
+    }
+    assert!(
+        edge.abs() <= 0.05,
+        "{label}: silhouette traced {edge} px off"
+    );
+}
+
+/// At a 170° field of view the sphere of [`silhouette_view`], 1.5 from the camera, spans the
+/// directions from the optical axis out to 83.6° from it: on the 32-pixel film an ellipse 12.5 px
+/// long from the centre, 3.5 px from the film's edge, where a pixel spans 0.5° (41° at the centre).
+/// The complete derivative of its centre's `x` and of its radius matches finite differences and the
+/// closed form of the ellipse's area ([`ellipse_sums`]).
+///
+/// Measured (32×32, 256 spp, 300,000 + 30,000 boundary samples; FD `h = 0.01` at 1024 spp; four
+/// seeds, `PSDR_TEST_SEED` 0 to 3): image sums, closed form 738.71 (`x`) and −1090.19 (radius);
+/// relative errors of the derivative against FD at most 0.016 (`x`) and 0.018 (radius), against the
+/// closed form 0.015 and 0.013, of FD against the closed form 0.014 and 0.016; blurred relative L2
+/// against FD 0.068–0.076 and 0.107–0.114; the interior term alone 46–48% off. The silhouette is
+/// traced within 0.001 px of where it is. Bounds: twice the largest of the four.
+#[test]
+fn silhouette_derivative_at_a_170_degree_field_of_view() {
+    let (fov, size, d) = (170.0, 32, 1.5);
+    check_silhouette(
+        "170°",
+        &silhouette_view(fov, size, d),
+        ellipse_sums(fov as f64, size, d as f64),
+        &SilhouetteCheck {
+            spp: 256,
+            primary: 300_000,
+            secondary: 30_000,
+            fd_spp: 1024,
+            h: 0.01,
+            sum_fd: 0.04,
+            sum_closed: 0.03,
+            fd_sum: 0.035,
+            l2: 0.23,
+        },
+        51,
+    );
+}
+
+/// At a hundredth of a degree the film of [`silhouette_view`] (16×16, the sphere 100 from the
+/// camera) sees 1.7e-4 radians of a silhouette 1.0e-2 in radius, a straight vertical edge: a pixel
+/// spans 1.1e-3 units there. The complete derivative of the centre's `x` and of the radius match
+/// finite differences and the straight edge's closed form ([`straight_edge_sums`]). Only 0.28% of
+/// the silhouette is on the film, and the primary term samples the whole curve: it needs 10⁶
+/// samples.
+///
+/// The two fields of view see different pieces of different silhouettes, so their sums are not
+/// comparable with each other; each is compared with the closed form of the same motion (the
+/// sphere's direction turning by `1/d` per unit of `x`, its angular radius widening by
+/// `1/(d cos α)` per unit of radius), integrated over what its film sees.
+///
+/// Measured (256 spp, 10⁶ + 10⁴ boundary samples; FD `h = 5e-4` (0.46 px) at 256 spp; four seeds,
+/// `PSDR_TEST_SEED` 0 to 3): image sums, closed form −22,001.6 (`x`) and −22,002.7 (radius);
+/// relative errors of the derivative against FD at most 0.022 (both), against the closed form
+/// 0.0068, of FD against the closed form 0.017; blurred relative L2 against FD 0.030–0.061; the
+/// interior term alone 48–51% off. The silhouette is traced 0.007 px inside the true one. Bounds:
+/// twice the largest of the four.
+#[test]
+fn silhouette_derivative_at_a_hundredth_of_a_degree() {
+    let (fov, size, d) = (0.01, 16, 100.0);
+    check_silhouette(
+        "0.01°",
+        &silhouette_view(fov, size, d),
+        straight_edge_sums(fov as f64, size, d as f64),
+        &SilhouetteCheck {
+            spp: 256,
+            primary: 1_000_000,
+            secondary: 10_000,
+            fd_spp: 256,
+            h: 5e-4,
+            sum_fd: 0.045,
+            sum_closed: 0.015,
+            fd_sum: 0.035,
+            l2: 0.13,
+        },
+        52,
+    );
+}
+
+/// [`silhouette_derivative_at_a_hundredth_of_a_degree`] with the sphere 4 from the camera: a pixel
+/// spans 4.2e-5 units at the silhouette, less than the sphere's tracing tolerance (2e-4). Rays
+/// passing up to 1.35e-5 inside the silhouette (chords through the sphere up to 0.010, 52
+/// tolerances) are stepped over as grazes: the closed-form crossing declines chords under 128
+/// tolerances, and the marcher creeps past them. The rendered silhouette sits 0.32 px inside the
+/// true one (middle row: last hit at 7.682 px, the silhouette at 8.002), while the primary term
+/// puts the edge on the true silhouette curve. With the default (differentiable) pixel
+/// normalisation the two no longer cancel in `∂F − I ∂W` (`I` next to the edge is the inset
+/// image's) and the image sum of the derivative falls 20% short. Measured (4·10⁶ primary samples,
+/// seeds 0 and 1): centre `x` −4.27e5 and −4.35e5 against FD −5.42e5 and −5.45e5 and the closed
+/// form −5.50e5 (with 10⁷ samples −4.56e5 and −4.44e5). With `fixed` normalisation (10⁷ samples)
+/// the sum is right, −5.56e5 and −5.78e5: the edge moves at the right speed, in the wrong place;
+/// the interior term's `∂W` lands on the columns either side of the traced edge (3.0e5 and 0.7e5)
+/// while the primary term's lands either side of the true one (1.8e5 each).
+#[test]
+#[ignore = "bug: at 0.01° the traced silhouette is inset 0.32 px; the derivative's sum is 20% short"]
+fn silhouette_derivative_at_a_hundredth_of_a_degree_close_up() {
+    let (fov, size, d) = (0.01, 16, 4.0);
+    check_silhouette(
+        "0.01° close up",
+        &silhouette_view(fov, size, d),
+        straight_edge_sums(fov as f64, size, d as f64),
+        &SilhouetteCheck {
+            spp: 256,
+            primary: 4_000_000,
+            secondary: 10_000,
+            fd_spp: 256,
+            h: 2e-5,
+            sum_fd: 0.045,
+            sum_closed: 0.015,
+            fd_sum: 0.035,
+            l2: 0.13,
+        },
+        53,
+    );
 }
