@@ -152,7 +152,21 @@ impl Camera {
     }
 }
 
+/// The share of a pixel's angular size that camera rays resolve ([`CameraFrame::spread`]).
+pub const PIXEL_RESOLUTION: f32 = 1.0 / 16.0;
+
 impl CameraFrame<f32> {
+    /// The detail a camera ray along the unit direction `d` must resolve, per unit distance from the
+    /// eye ([`crate::trace::TraceSettings::spread`]): [`PIXEL_RESOLUTION`] times the angular size of a
+    /// pixel there, `cos²θ / f` (`θ` the angle to the optical axis, `f` the focal length in pixels:
+    /// the smaller of a pixel's radial and tangential sizes), so that a silhouette seen at a tiny field
+    /// of view is traced to a fraction of a pixel, whatever the scene's size.
+    #[inline]
+    pub fn spread(&self, d: glam::Vec3) -> f32 {
+        let cos = d.dot(self.forward.into());
+        PIXEL_RESOLUTION * cos * cos / self.focal
+    }
+
     /// The primary ray through film position `film` (pixels), from the eye, with a unit direction.
     #[inline]
     pub fn generate_ray(&self, film: glam::Vec2) -> Ray {

@@ -134,6 +134,7 @@ fn closed_forms_find_what_the_tracer_finds() {
             let settings = TraceSettings {
                 eps: 1e-4 * size,
                 max_steps: 1 << 16,
+                ..TraceSettings::default()
             };
             let (mut hits, mut compared) = (0, 0);
             for i in 0..3000u64 {

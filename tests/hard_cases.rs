@@ -14,9 +14,19 @@
 mod common;
 
 use common::deriv::*;
-use common::hard_scenes::{self, diffuse};
+use common::hard_scenes::{self, Ground, diffuse};
 use implicit_psdr::integrator::boundary::primary::render_primary;
 use implicit_psdr::scene::Scene;
+
+/// Bounds of the three [`hard_scenes::ball_over_ground`] cases (huge floor, plane, far from the
+/// origin), one pair per parameter, twice the largest of the three. Measured, `ball.center.x`: L2
+/// huge (0.093, 0.066), plane (0.067, 0.068), far (0.053, 0.067), sums ≤ 0.040; interior alone
+/// 0.55–0.58. `light.center.x`: L2 huge (0.038, 0.049), plane (0.050, 0.038), far (0.037, 0.042),
+/// sums ≤ 0.031; interior alone 0.17–0.21.
+const L2_BALL: f64 = 0.19;
+const SUM_BALL: f64 = 0.081;
+const L2_LIGHT: f64 = 0.1;
+const SUM_LIGHT: f64 = 0.062;
 
 fn budget() -> Budget {
     Budget {
@@ -262,6 +272,53 @@ fn light_touching_an_occluder() {
         &[check("ball.center.y", 0.01, 0.28, 0.15)],
         budget,
         20,
+    );
+}
+
+/// A ball over a floor box 10,000 units wide ([`hard_scenes::ball_over_ground`]): the tolerances are
+/// the ball's and the float resolution's where the rays are, not the floor's size.
+#[test]
+fn huge_floor() {
+    let s = hard_scenes::ball_over_ground(32, Ground::Huge, [0.0; 3]);
+    measure(
+        "huge_floor",
+        &s,
+        &[
+            check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
+            check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
+        ],
+        21,
+    );
+}
+
+/// The same ball over the unbounded plane `y = 0`: rays skimming it to the horizon finish.
+#[test]
+fn plane_floor() {
+    let s = hard_scenes::ball_over_ground(32, Ground::Plane, [0.0; 3]);
+    measure(
+        "plane_floor",
+        &s,
+        &[
+            check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
+            check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
+        ],
+        22,
+    );
+}
+
+/// The ball over the huge floor with the whole scene moved 1,000 units from the origin (along
+/// (1, −0.7, 0.3)), where the float resolution is 1.2·10⁻⁴.
+#[test]
+fn far_from_the_origin() {
+    let s = hard_scenes::ball_over_ground(32, Ground::Huge, [1000.0, -700.0, 300.0]);
+    measure(
+        "far_from_the_origin",
+        &s,
+        &[
+            check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
+            check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
+        ],
+        23,
     );
 }
 

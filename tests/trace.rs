@@ -173,12 +173,13 @@ fn exhausted_rays_are_reported() {
         max_steps: 3,
         ..TraceSettings::default()
     };
-    // Lipschitz bound 4 (valid, loose): each step is a quarter of the distance, so 3 steps cannot arrive.
-    match sphere_trace(&sdf, 4.0, &ray, 0.0, 100.0, &tiny) {
+    // Lipschitz bound 1000 (valid, loose): each step is a thousandth of the distance, so the budget (3
+    // steps, plus at most 16 × 3 for the interval's length: `TraceSettings::max_steps`) cannot arrive.
+    match sphere_trace(&sdf, 1000.0, &ray, 0.0, 100.0, &tiny) {
         ShapeTrace::Exhausted(t) => assert!(t > 0.0 && t < 9.0, "stopped at {t}"),
         other => panic!("expected Exhausted, got {other:?}"),
     }
-    let (hits, ex) = all_hits_checked(&sdf, 4.0, &ray, 0.0, 100.0, &tiny);
+    let (hits, ex) = all_hits_checked(&sdf, 1000.0, &ray, 0.0, 100.0, &tiny);
     assert!(hits.is_empty() && ex.is_some());
     // With the default budget the same ray hits, and a loose Lipschitz bound still finds the same root.
     let settings = TraceSettings::default();
@@ -296,6 +297,7 @@ fn error_shrinks_with_eps() {
         let settings = TraceSettings {
             eps,
             max_steps: 4096,
+            ..TraceSettings::default()
         };
         let mut w = 0.0f64;
         for i in 0..500u64 {

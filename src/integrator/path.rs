@@ -203,7 +203,7 @@ pub fn sample_light(
     }
     let select = 1.0 / count as f32;
     let pdf_w = select * es.pdf;
-    let o = scene.offset_origin(p, n, es.wi);
+    let o = scene.offset_origin(shape, p, n, es.wi);
     let infinite = emitter.is_infinite();
     let (t_max, pdf) = if infinite {
         (f32::INFINITY, pdf_w)
@@ -233,10 +233,13 @@ pub fn sample_light(
 
 /// Traces the camera ray `ray` in `f32` and records its path: up to `max_scatter` scattering vertices,
 /// each with one light sample and one BSDF sample. Draws from `sampler` in a fixed order per vertex
-/// (emitter choice, light point, BSDF direction).
+/// (emitter choice, light point, BSDF direction). The first ray resolves detail down to `spread · t`
+/// ([`crate::trace::TraceSettings::spread`]; a camera ray's [`crate::camera::CameraFrame::spread`],
+/// infinite for none).
 pub fn trace_path(
     scene: &Scene,
     ray: Ray,
+    spread: f32,
     max_scatter: u32,
     sampler: &mut Sampler,
     record: &mut PathRecord,
@@ -255,7 +258,8 @@ pub fn trace_path(
         let next = if scatter >= max_scatter {
             emission_along(scene, &ray, counters)
         } else {
-            match scene.intersect(&ray, f32::INFINITY) {
+            let spread = if scatter == 0 { spread } else { f32::INFINITY };
+            match scene.intersect_resolving(&ray, f32::INFINITY, spread) {
                 Intersection::Hit(h) => Next::Surface(h),
                 Intersection::Miss => Next::Escape,
                 Intersection::Exhausted => {
@@ -337,7 +341,7 @@ pub fn trace_path(
                 };
                 bsdf_pdf = Some(bs.pdf);
                 prev = h.p;
-                ray = Ray::new(scene.offset_origin(h.p, h.n, bs.wi), bs.wi);
+                ray = Ray::new(scene.offset_origin(s, h.p, h.n, bs.wi), bs.wi);
             }
         }
     }

@@ -37,6 +37,7 @@ pub fn trace_sample(
     trace_path(
         scene,
         ray,
+        frame.spread(ray.d),
         scene.integrator.max_scatter(),
         &mut sampler,
         record,

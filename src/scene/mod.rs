@@ -37,6 +37,9 @@ pub struct Shape {
     pub bounds: Aabb,
     /// Lipschitz bounds of the SDF on each side of its surface, from [`Sdf::lipschitz_sided`].
     pub lipschitz: Lipschitz,
+    /// Whether the surface may have crease edges ([`Sdf::creases`]): only next to one can a point pushed
+    /// off one face still lie on another ([`Scene::offset_origin`]).
+    pub creased: bool,
 }
 
 impl Shape {
@@ -51,6 +54,7 @@ impl Shape {
         let local = sdf.bounds();
         let bounds = Aabb::new(local.min + t, local.max + t);
         let lipschitz = sdf.lipschitz_sided();
+        let creased = sdf.creases().is_some();
         Self {
             name: name.into(),
             sdf,
@@ -58,6 +62,7 @@ impl Shape {
             translate,
             bounds,
             lipschitz,
+            creased,
         }
     }
 
@@ -253,7 +258,14 @@ impl Scene {
     }
 
     /// The first surface hit by `ray` in `(0, t_max)`.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Intersection {
+        self.intersect_resolving(ray, t_max, f32::INFINITY)
+    }
+
+    /// [`Scene::intersect`] for a ray that must resolve detail down to `spread · t` at parameter `t`
+    /// ([`TraceSettings::spread`]): a camera ray, with [`Camera::spread`].
+    pub fn intersect_resolving(&self, ray: &Ray, t_max: f32, spread: f32) -> Intersection {
         let mut nearest = Nearest {
             t: t_max,
             surface: None,
@@ -288,12 +300,12 @@ impl Scene {
                 intervals[k] = (t0, t1, i);
                 count += 1;
             } else {
-                self.trace_shape(i, ray, t0, t1, &mut nearest);
+                self.trace_shape(i, ray, t0, t1, spread, &mut nearest);
             }
         }
         for &(t0, t1, i) in &intervals[..count] {
             if t0 < nearest.t {
-                self.trace_shape(i, ray, t0, t1.min(nearest.t), &mut nearest);
+                self.trace_shape(i, ray, t0, t1.min(nearest.t), spread, &mut nearest);
             }
         }
         match nearest.surface {
@@ -317,9 +329,21 @@ impl Scene {
 
     /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
     #[inline]
-    fn trace_shape(&self, i: usize, ray: &Ray, t0: f32, t1: f32, nearest: &mut Nearest) {
+    fn trace_shape(
+        &self,
+        i: usize,
+        ray: &Ray,
+        t0: f32,
+        t1: f32,
+        spread: f32,
+        nearest: &mut Nearest,
+    ) {
         let shape = &self.shapes[i];
-        match shape.trace(ray, t0, t1, &self.shape_trace(shape)) {
+        let settings = TraceSettings {
+            spread,
+            ..self.shape_trace(shape)
+        };
+        match shape.trace(ray, t0, t1, &settings) {
             ShapeTrace::Hit(t) if t < nearest.t => {
                 nearest.t = t;
                 nearest.surface = Some(Surface::Shape(i));
@@ -359,13 +383,41 @@ impl Scene {
         (shape.bounds).clip_with_margin(ray, 0.0, t_max, |entry| self.trace.eps_at(origin + entry))
     }
 
-    /// Origin of a ray leaving the surface point `p` (normal `n`) along `w`: `p` moved off the surface by
-    /// four times the local tolerance at `p` to `w`'s side (at least 64 ulps of `p`'s largest
-    /// coordinate), so that a ray cannot start inside the surface noise and hit its own origin.
+    /// Origin of a ray leaving the surface of shape `shape` at `p` (normal `n`) along `w`: `p` moved off
+    /// the surface by four times the local tolerance at `p` to `w`'s side, so that a ray cannot start
+    /// inside the surface noise and hit its own origin.
+    ///
+    /// Next to a crease the normal of one face does not clear the other: a point on a room's wall within
+    /// a tolerance of its ceiling, pushed off the wall, is still on the ceiling, and a ray from there up
+    /// into the ceiling would start on the surface and pass through it (the tracer reports no crossing
+    /// at a start on the surface, see [`crate::trace`]). On a shape that may have creases
+    /// ([`Shape::creased`]), where the pushed point is less than half the offset from the surface on
+    /// `w`'s side, one Newton step along `∇φ` there moves it to the full offset from the face it is
+    /// near. (A smooth surface's other parts are farther than four tolerances, unless thinner than
+    /// the tracer resolves.)
     #[inline]
-    pub fn offset_origin(&self, p: glam::Vec3, n: glam::Vec3, w: glam::Vec3) -> glam::Vec3 {
+    pub fn offset_origin(
+        &self,
+        shape: usize,
+        p: glam::Vec3,
+        n: glam::Vec3,
+        w: glam::Vec3,
+    ) -> glam::Vec3 {
         let offset = 4.0 * self.trace.eps_at_point(p);
-        p + n * if n.dot(w) >= 0.0 { offset } else { -offset }
+        let side = if n.dot(w) >= 0.0 { 1.0 } else { -1.0 };
+        let o = p + n * (side * offset);
+        let shape = &self.shapes[shape];
+        if !shape.creased {
+            return o;
+        }
+        let g = side * shape.eval_f32(o);
+        // Far enough already (or a NaN value: nothing better to do).
+        if g >= 0.5 * offset || g.is_nan() {
+            return o;
+        }
+        let grad = shape.gradient(o);
+        let pushed = o + grad * (side * (offset - g) / grad.length_squared());
+        if pushed.is_finite() { pushed } else { o }
     }
 }
 

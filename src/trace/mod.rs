@@ -6,13 +6,15 @@
 //! function `g(t) = s·φ(o + t d)`, with `s = ±1` chosen so that `g(t0) ≥ 0` (`s = −1` if the ray starts
 //! inside: then the first crossing is the *exit*; on the surface, see below).
 //! Each step is `g/L` (Hart 1996), `L` the Lipschitz bound of `φ`, which cannot cross the surface. Where
-//! that step falls below the resolution `h` (the local tolerance [`TraceSettings::eps_at`] where the ray
-//! is, below written `eps`), the tracer *creeps* instead: steps of `h`,
-//! doubling on each consecutive creep step up to `64 h`, until `g` changes sign (an overshoot into the
-//! shape is fine: it brackets the crossing). The bracket is then refined with the Illinois variant of
-//! regula falsi. Creeping with growing steps keeps grazing rays cheap (a ray skimming a unit sphere at
-//! `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`; fixed `eps` steps would spend the whole
-//! budget there).
+//! that step falls below `64 h`, `h` the resolution (the local tolerance [`TraceSettings::eps_at`] where
+//! the ray is, below written `eps`), the tracer *creeps* instead: steps of the larger of `g/L` and a
+//! creep step that starts at `h` and doubles on each consecutive creep step up to `64 h`, until `g`
+//! changes sign (an overshoot into the shape is fine: it brackets the crossing). The bracket is then
+//! refined with the Illinois variant of regula falsi. Creeping with growing steps keeps grazing rays
+//! cheap: a ray skimming a unit sphere at `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`, and
+//! a ray running parallel to a wall a few `eps` from it (leaving a wall of a room at a shallow angle,
+//! a line tangent along a rounded edge) would advance by those few `eps` per step with `g/L` alone,
+//! and by `64 eps` creeping.
 //!
 //! # Closed forms
 //!
@@ -37,6 +39,12 @@
 //! to (at its entry point), the offset of rays leaving a surface (four tolerances), the boundary
 //! samplers' occlusion margins and the area sampler's padding.
 //!
+//! A camera ray also resolves its pixel: at `t` the floor is at most `spread · t`
+//! ([`TraceSettings::spread`], a sixteenth of the pixel's angular size), so that at a tiny field of
+//! view, where a pixel is far smaller than the shape's `eps₀`, silhouettes are still traced to a
+//! fraction of a pixel (the float resolution `16 ε m` remains the limit). The primary boundary term
+//! looks up the background beyond an edge with the same camera-ray tolerance.
+//!
 //! Consequences, by design:
 //! - **Tolerance.** The returned `t` satisfies `|φ(t)| ≤ eps/100` (or the bracket has shrunk to a few
 //!   ulps of `t`), so `|t − t_true| ≲ 0.01·eps / |∇φ·d|`: tight for transversal hits, looser for grazing
@@ -48,9 +56,12 @@
 //! - **Thin features**: where the ray creeps, a crossing whose chord along the ray is shorter than the
 //!   current creep step (at most `64 eps`) may be stepped over: a dip of depth `≲ 512 eps²/R` into a smooth
 //!   surface of radius `R` (negligible for `R ≫ eps`), a box corner clipped over less than `64 eps`, a
-//!   plate thinner than that along the ray. Far from surfaces nothing is skipped.
-//! - **Budget**: at most `settings.max_steps` evaluations of `φ` per crossing searched; a ray that runs
-//!   out (typically a ray skimming a surface for a long way) reports [`ShapeTrace::Exhausted`].
+//!   plate thinner than that along the ray. More than `64 eps` from every surface nothing is skipped.
+//! - **Budget**: at most `settings.max_steps` evaluations of `φ` per crossing searched, plus the number of
+//!   `64 eps` steps that cross the rest of the interval (capped at 16 `max_steps`; nothing for an
+//!   unbounded interval): a ray parallel to a surface and within `64 eps` of it advances by about that
+//!   much per step, so its cost follows the shape's size in tolerances. A ray that runs out reports
+//!   [`ShapeTrace::Exhausted`]: a bug to report, which the renderer counts.
 //! - **Starting on the surface** (`|φ(t0)| ≤ eps/100`, e.g. at a point the tracer returned): the ray
 //!   belongs to the side it moves into, found by probing `φ` at `t0 + eps, t0 + 2 eps, …` (up to `64 eps`)
 //!   until `|φ|` rises above the float noise; `t0` itself is never reported. So a ray leaving a surface
@@ -78,8 +89,15 @@ pub struct TraceSettings {
     /// steps of it looking for the sign change; after refinement `|φ(t)|` is below
     /// [`TraceSettings::on_surface_at`] (see the [module docs](self)).
     pub eps: f32,
-    /// Steps before a ray is declared exhausted.
+    /// Steps before a ray is declared exhausted, per crossing searched; the tracer adds the steps of
+    /// at most `64 eps` that cross the rest of the interval, up to 16 times this (see the
+    /// [module docs](self)).
     pub max_steps: u32,
+    /// The detail a ray must resolve, per unit of its parameter: at `t` the tolerance floor is at most
+    /// `spread · t` ([`TraceSettings::eps_along`]). A camera ray's is a fraction of its pixel's angular
+    /// size, so that a narrow field of view sees its silhouettes where they are; infinite (no limit)
+    /// for every other ray.
+    pub spread: f32,
 }
 
 /// The local tolerance in ulps of the coordinates' magnitude (see [`TraceSettings`]).
@@ -92,6 +110,23 @@ impl TraceSettings {
         self.eps
             .max(TOLERANCE_ULPS * f32::EPSILON * magnitude)
             .max(f32::MIN_POSITIVE)
+    }
+
+    /// The hit tolerance at parameter `t` of a ray whose origin's largest coordinate has magnitude
+    /// `origin_magnitude` (a unit direction: the coordinates there are at most `origin_magnitude + |t|`):
+    /// [`TraceSettings::eps_at`] with the floor lowered to `spread · |t|`, and never below the float
+    /// resolution there.
+    #[inline]
+    pub fn eps_along(&self, origin_magnitude: f32, t: f32) -> f32 {
+        let magnitude = origin_magnitude + t.abs();
+        let footprint = self.spread * t.abs();
+        if footprint < self.eps {
+            footprint
+                .max(TOLERANCE_ULPS * f32::EPSILON * magnitude)
+                .max(f32::MIN_POSITIVE)
+        } else {
+            self.eps_at(magnitude)
+        }
     }
 
     /// [`TraceSettings::eps_at`] the point `p`.
@@ -113,6 +148,7 @@ impl Default for TraceSettings {
         Self {
             eps: 1e-4,
             max_steps: 2048,
+            spread: f32::INFINITY,
         }
     }
 }
@@ -132,6 +168,10 @@ pub enum ShapeTrace {
 /// is shorter than the step: on a smooth surface of radius `R` that is a dip of depth `≲ (32 eps)² / 2R`
 /// below the surface, below `eps` whenever `R ≳ 500 eps`.
 const MAX_CREEP: f32 = 64.0;
+/// Cap of the interval-dependent part of the step budget ([`Marcher::budget`]), in units of
+/// `max_steps`: bounds the work on a pathological interval (a tolerance floor far below the shape's
+/// size).
+const MAX_EXTRA_BUDGET: f32 = 16.0;
 /// Refinement target: `|φ|` at the returned `t`, as a fraction of `eps`.
 const REFINE_FRACTION: f32 = 0.01;
 /// Refinement iterations (Illinois converges superlinearly: 4 to 8 are typical).
@@ -228,13 +268,28 @@ impl<'a> Marcher<'a> {
     /// The local tolerance at parameter `t` ([`TraceSettings::eps_at`]).
     #[inline]
     fn eps(&self, t: f32) -> f32 {
-        self.settings.eps_at(self.origin_magnitude + t.abs())
+        self.settings.eps_along(self.origin_magnitude, t)
     }
 
     /// `|φ|` below which the point at `t` counts as on the surface.
     #[inline]
     fn on_surface(&self, t: f32) -> f32 {
-        self.settings.on_surface_at(self.origin_magnitude + t.abs())
+        REFINE_FRACTION * self.eps(t)
+    }
+
+    /// The step budget of a crossing search from `t`: `max_steps`, plus the largest creep steps it takes
+    /// to cross what is left of the interval. A ray running parallel to a surface a few tolerances
+    /// from it (a line tangent along a rounded edge, a ray skimming a wall) advances by at most one such
+    /// step at a time, so its cost grows with the interval's length in tolerances, not with the scene's
+    /// complexity. An unbounded interval adds nothing.
+    fn budget(&self, t: f32) -> u32 {
+        let crossing = (self.t1 - t) / (MAX_CREEP * self.eps(t));
+        let extra = if crossing.is_finite() && crossing > 0.0 {
+            crossing.min(MAX_EXTRA_BUDGET * self.settings.max_steps as f32) as u32
+        } else {
+            0
+        };
+        self.settings.max_steps.saturating_add(extra)
     }
 
     #[inline]
@@ -289,8 +344,8 @@ impl<'a> Marcher<'a> {
         // Marching on one side needs only that side's bound.
         let inv_l = self.inv_l[usize::from(sign < 0.0)];
         let (mut t, mut g) = (from.t, from.g);
-        // Creep step inside the `eps` zone: starts at `eps`, doubles on each consecutive creep step up to
-        // `MAX_CREEP · eps`, resets when the ray leaves the zone.
+        // Creep step inside the zone `g/L < MAX_CREEP · eps`: starts at `eps`, doubles on each consecutive
+        // creep step up to `MAX_CREEP · eps`, resets when the ray leaves the zone.
         let mut creep = self.eps(t);
         loop {
             // Also stops on a NaN parameter.
@@ -302,7 +357,7 @@ impl<'a> Marcher<'a> {
             }
             let safe = g * inv_l;
             let eps = self.eps(t);
-            let step = if safe >= eps {
+            let step = if safe >= MAX_CREEP * eps {
                 creep = eps;
                 safe
             } else {
@@ -395,6 +450,7 @@ impl<'a> Marcher<'a> {
         ) {
             return None;
         }
+        self.steps_left = self.budget(t0);
         let phi = self.phi(t0);
         if phi.is_nan() {
             return None;
@@ -424,7 +480,7 @@ fn closed_form(
     let line = sdf.line_crossings(ray)?;
     let t = &line.t[..line.count];
     if line.count == 2 {
-        let eps = settings.eps_at(origin_magnitude + t[0].abs().max(t[1].abs()));
+        let eps = settings.eps_along(origin_magnitude, t[0].abs().max(t[1].abs()));
         if t[1] - t[0] < 2.0 * MAX_CREEP * eps {
             return None;
         }
@@ -432,10 +488,10 @@ fn closed_form(
     // Only a start within a tolerance of a crossing can be on the surface or on the other side of it
     // by rounding: only then is `φ(t0)` needed (elsewhere the crossings' parity gives the side).
     let behind = t.iter().filter(|&&t| t <= t0).count();
-    let eps0 = settings.eps_at(origin_magnitude + t0.abs());
+    let eps0 = settings.eps_along(origin_magnitude, t0);
     if t.iter().any(|&t| (t - t0).abs() <= eps0) {
         let phi0 = sdf.eval_f32(ray.at(t0));
-        if phi0.is_nan() || phi0.abs() <= settings.on_surface_at(origin_magnitude + t0.abs()) {
+        if phi0.is_nan() || phi0.abs() <= REFINE_FRACTION * eps0 {
             return None;
         }
         if (phi0 < 0.0) != (line.inside_before ^ (behind % 2 == 1)) {
@@ -554,7 +610,7 @@ pub fn all_hits_checked(
             Crossing::Hit { t, next } => {
                 hits.push(t);
                 side = next;
-                m.steps_left = settings.max_steps;
+                m.steps_left = m.budget(side.t);
             }
             Crossing::Miss => return (hits, None),
             Crossing::Exhausted(at) => return (hits, Some(at)),
@@ -574,6 +630,7 @@ mod tests {
         let settings = TraceSettings {
             eps: 1e-3,
             max_steps: 512,
+            ..TraceSettings::default()
         };
         let plane = Sdf::plane(Vec3::Y, 0.0);
         let sphere = Sdf::sphere([0.0, 0.0, 0.0], 1.0);

@@ -214,3 +214,58 @@ pub fn light_touching_an_occluder(size: u32) -> Scene {
         r#"{"name": "light", "type": "sphere", "center": [0.7, 0.8, 0], "radius": 0.2, "radiance": [20, 20, 20]}"#,
     )
 }
+
+/// The ground under [`ball_over_ground`].
+#[derive(Copy, Clone, Debug)]
+pub enum Ground {
+    /// A box 10,000 units wide (half size 5,000 × 0.5 × 5,000, its top at `y = 0`, edges rounded by
+    /// 0.02): the scene's extent is that of the floor, the ball's a ten-thousandth of it.
+    Huge,
+    /// The unbounded plane `y = 0`.
+    Plane,
+}
+
+/// A ball resting 0.2 above a ground under the rectangle light and the sky, the whole scene moved by
+/// `offset`: tolerances must follow the float resolution where the rays are, not the floor's size
+/// (a huge box, a plane) nor the distance to the origin, and rays skimming the ground towards the
+/// horizon must finish.
+pub fn ball_over_ground(size: u32, ground: Ground, offset: [f32; 3]) -> Scene {
+    let at = |p: [f32; 3]| {
+        format!(
+            "[{}, {}, {}]",
+            p[0] + offset[0],
+            p[1] + offset[1],
+            p[2] + offset[2]
+        )
+    };
+    let ground = match ground {
+        Ground::Huge => format!(
+            r#"{{"type": "box", "center": {}, "half_size": [5000, 0.5, 5000], "rounding": 0.02}}"#,
+            at([0.0, -0.5, 0.0])
+        ),
+        Ground::Plane => format!(
+            r#"{{"type": "plane", "normal": [0, 1, 0], "offset": {}}}"#,
+            offset[1]
+        ),
+    };
+    scene(
+        size,
+        &format!(
+            r#""origin": {}, "target": {}, "fov_y": 40"#,
+            at([0.0, 1.2, 3.5]),
+            at([0.0, 0.4, 0.0])
+        ),
+        &format!(
+            r#"{{"name": "floor", "sdf": {ground}, {}}},
+               {{"name": "ball", "sdf": {{"type": "sphere", "center": {}, "radius": 0.4}}, {}}}"#,
+            diffuse(0.5),
+            at([0.0, 0.6, 0.0]),
+            diffuse(0.7)
+        ),
+        &format!(
+            r#"{{"name": "light", "type": "rectangle", "center": {}, "normal": [0, -1, 0],
+                "u": [1, 0, 0], "size": [1, 1], "radiance": [30, 30, 30]}}, {SKY}"#,
+            at([1.5, 4.0, 1.0])
+        ),
+    )
+}

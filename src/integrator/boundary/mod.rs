@@ -129,10 +129,21 @@ pub(crate) fn splat_on_film<S: Scalar>(
 pub(crate) const BACKGROUND_OFFSET_PIXELS: f32 = 0.02;
 
 /// The world-space length of [`BACKGROUND_OFFSET_PIXELS`] at distance `dist` from the eye (`focal` in
-/// pixels), at least four local tolerances there so the offset ray clears the edge's own surface.
+/// pixels), at least four of a camera ray's tolerances there so the offset ray clears the edge's own
+/// surface.
 pub(crate) fn background_offset(scene: &Scene, dist: f32, focal: f32) -> f32 {
-    let magnitude = scene.camera.origin.value().abs().max_element() + dist;
-    (BACKGROUND_OFFSET_PIXELS * dist / focal).max(4.0 * scene.trace.eps_at(magnitude))
+    let spread = crate::camera::PIXEL_RESOLUTION / focal;
+    (BACKGROUND_OFFSET_PIXELS * dist / focal).max(4.0 * camera_ray_eps(scene, spread, dist))
+}
+
+/// The hit tolerance of a camera ray resolving `spread` ([`crate::trace::TraceSettings::spread`]) at
+/// distance `dist` from the eye.
+fn camera_ray_eps(scene: &Scene, spread: f32, dist: f32) -> f32 {
+    let settings = crate::trace::TraceSettings {
+        spread,
+        ..scene.trace
+    };
+    settings.eps_along(scene.camera.origin.value().abs().max_element(), dist)
 }
 
 /// The rows `(∂u/∂x, ∂v/∂x)` of the film projection's 2×3 Jacobian at `x_B = eye + q` (`None` behind
@@ -155,24 +166,27 @@ pub(crate) fn projection_jacobian(
 }
 
 /// The background radiance beyond an edge at distance `dist` from the eye, seen along the camera `ray`
-/// just outside it (`delta` from [`background_offset`]): `None` when something nearer hides the edge;
-/// else one camera path of the scene's own estimator, left in `record` (its first vertex is `x_D`), and
-/// its detached radiance.
+/// just outside it (`delta` from [`background_offset`]; `spread`, the ray's
+/// [`crate::camera::CameraFrame::spread`]): `None` when something nearer hides the edge; else one
+/// camera path of the scene's own estimator, left in `record` (its first vertex is `x_D`), and its
+/// detached radiance.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn background_radiance(
     scene: &Scene,
     ray: Ray,
+    spread: f32,
     dist: f32,
     delta: f32,
     sampler: &mut Sampler,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> Option<glam::Vec3> {
-    let margin = 4.0 * delta + 8.0 * scene.trace.eps_at(ray.o.abs().max_element() + dist);
+    let margin = 4.0 * delta + 8.0 * camera_ray_eps(scene, spread, dist);
     if occluded(scene, &ray, dist - margin, None, counters) {
         return None;
     }
     let depth = scene.integrator.max_scatter();
-    trace_path(scene, ray, depth, sampler, record, counters);
+    trace_path(scene, ray, spread, depth, sampler, record, counters);
     Some(contribution::<f32>(scene, record, detached).into())
 }
 

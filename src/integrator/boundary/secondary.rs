@@ -343,7 +343,7 @@ impl Context<'_> {
             if !weight.is_finite() {
                 continue;
             }
-            let o = scene.offset_origin(hit.p, hit.n, hit.n);
+            let o = scene.offset_origin(m, hit.p, hit.n, hit.n);
             // An exhausted trace counts as a miss, as in the integrator's own paths
             // (`path::trace_path`, `occluded`): the primal treats such a line as escaping, so its
             // derivative must too (typically a line leaving at a shallow angle above an infinite
@@ -461,7 +461,7 @@ impl Context<'_> {
                 // The segment's own line (x_S and x_D lie on it; x_B is pushed off M like the traced
                 // line), continued from its first hit x_D.
                 let kmin = cams.iter().map(|c| c.depth).min().unwrap_or(1);
-                let o = scene.offset_origin(x_b, seg.n_b, seg.n_b);
+                let o = scene.offset_origin(m, x_b, seg.n_b, seg.n_b);
                 let Some(w) = (x_d - x_s).try_normalize() else {
                     return;
                 };

@@ -166,7 +166,7 @@ pub fn camera_side(
         if beta == glam::Vec3::ZERO || !beta.is_finite() {
             return;
         }
-        let ray = Ray::new(scene.offset_origin(x, n, bs.wi), bs.wi);
+        let ray = Ray::new(scene.offset_origin(s, x, n, bs.wi), bs.wi);
         match scene.intersect(&ray, f32::INFINITY) {
             Intersection::Hit(h) => match h.surface {
                 Surface::Shape(next) => {
@@ -202,7 +202,15 @@ pub fn radiance_by_depth(
     counters: &mut TraceCounters,
 ) -> bool {
     out.clear();
-    trace_path(scene, ray, max_scatter, sampler, record, counters);
+    trace_path(
+        scene,
+        ray,
+        f32::INFINITY,
+        max_scatter,
+        sampler,
+        record,
+        counters,
+    );
     if record.vertices.first().map(|v| v.kind) != Some(VertexKind::Shape(shape)) {
         return false;
     }
