@@ -75,7 +75,9 @@ impl GridData {
 /// within `[0, n − 1]`) on one axis, with the ghost points folded in.
 #[inline(always)]
 fn axis_taps<S: Scalar>(u: S, n: usize) -> ([usize; 4], [S; 4]) {
-    let i = (u.primal().floor().max(0.0) as usize).min(n - 2);
+    // `as usize` truncates towards zero and saturates negatives (and NaN) to 0: for `u ≥ 0` it is the
+    // floor, below 0 the clamp to the first cell. Cheaper than `floor`, a libm call without SSE4.1.
+    let i = (u.primal() as usize).min(n - 2);
     let t = u - i as f32;
     let t2 = t * t;
     let t3 = t2 * t;
