@@ -319,3 +319,53 @@ fn small_sphere_curve_is_closed_and_has_the_circle_length() {
     let ratio = curve.polyline_length() / exact;
     assert!((ratio - 1.0).abs() < 1e-4, "length ratio {ratio}");
 }
+
+/// [`sphere_scene`] scaled by `s` and moved `far · s` from the origin: the extracted silhouette is
+/// closed, every vertex on both zero sets (`|φ|` within `10⁻⁵` of the larger of the radius and the
+/// coordinates' magnitude, relative `|ψ|` within `10⁻⁵`), and its length the closed-form circle's to
+/// `10⁻³`.
+fn check_sphere_silhouette_at(s: f32, far: f32) {
+    let (_, eye, centre) = sphere_scene();
+    let offset = Vec3::new(0.6, -0.3, 0.74) * far;
+    let (centre, eye) = ((centre + offset) * s, (eye + offset) * s);
+    let shape = shape_at(Sdf::sphere([0.0; 3], R * s), centre);
+    let what = format!("scale {s}, {far} radii away");
+    let curve = extract_silhouette(&shape, eye, &options(6)).unwrap();
+    assert_closed(&curve, &what, 0);
+    let (phi, psi) = residuals(&shape, eye, &curve);
+    let magnitude = centre.abs().max_element() + R * s;
+    assert!(
+        phi <= 1e-5 * magnitude.max(R * s) && psi <= 1e-5,
+        "{what}: residuals φ {phi}, ψ {psi}"
+    );
+    let sin_a = (R / D) as f64;
+    let exact = 2.0 * PI * (R * s) as f64 * (1.0 - sin_a * sin_a).sqrt();
+    let ratio = curve.polyline_length() / exact;
+    println!("{what}: length ratio {ratio}, residuals φ {phi:e} ψ {psi:e}");
+    assert!((ratio - 1.0).abs() < 1e-3, "{what}: length ratio {ratio}");
+}
+
+/// The extraction's tolerances follow the shape's size, not the unit length: a sphere's silhouette
+/// (radius 10⁻⁴ to 10⁴, near the origin) is the same closed circle at every scale. Measured: length
+/// ratios within 1.1·10⁻⁵ of 1 at every scale.
+#[test]
+fn sphere_silhouette_is_the_same_at_every_scale() {
+    for s in [1e-4f32, 1e-2, 1.0, 1e2, 1e4] {
+        check_sphere_silhouette_at(s, 0.0);
+    }
+}
+
+/// The same sphere 1,000 radii from the origin, where coordinates resolve a ten-thousandth of the
+/// radius: the extraction leaves the curve open. Measured at scales 10⁻⁴ to 10⁴: 102 to 170 open
+/// ends, 5 to 81 unresolved boxes (two branches or a missed crossing on a box face), up to 99 failed
+/// Newton refinements. The curve is extracted and refined in world coordinates, where `φ` and `ψ`
+/// carry rounding noise of a ten-thousandth of the radius; doing it in the shape's own frame (its
+/// `translate` removed) would fix shapes placed by `translate`, not those whose own parameters (a
+/// sphere's `center`) are far.
+#[test]
+#[ignore = "bug: a silhouette 1,000 radii from the origin is extracted with open ends"]
+fn sphere_silhouette_far_from_the_origin() {
+    for s in [1e-4f32, 1e-2, 1.0, 1e2, 1e4] {
+        check_sphere_silhouette_at(s, 1000.0);
+    }
+}
