@@ -26,6 +26,13 @@
 //!   more crossings is skipped and counted in [`ExtractStats::unresolved_boxes`]. Either may leave open
 //!   ends in the polyline ([`ExtractStats::open_ends`]); the tests find none on their shapes.
 //!
+//! **Frame.** The curve is extracted and sampled in the shape's own frame, its `translate` removed
+//! ([`SilhouetteCurve::origin`]): there the coordinates have the magnitude of the shape, and `φ`, `ψ`
+//! and Newton's steps the float resolution of its size, wherever the shape is placed. In world
+//! coordinates 1,000 radii from the origin their rounding noise left the curve open (see
+//! `tests/silhouette_curve.rs`). Parameters that place a shape inside its SDF (a sphere's `center`)
+//! do not benefit.
+//!
 //! **Sampling.** A segment `[a, b]` with direction `t` is chosen with probability proportional to its
 //! length and `s` uniformly on it, then mapped to the curve point `x(s)` in the plane `(x − a)·t = s`
 //! ([`solve_on_plane`]). Segment ends are curve points, so the pieces `x([0, |b − a|])` of consecutive
@@ -40,7 +47,9 @@
 use crate::error::Result;
 use crate::integrator::silhouette_boxes::{BoxClass, classify_box, silhouette_boxes};
 use crate::math::Aabb;
+use crate::scalar::Param3;
 use crate::scene::Shape;
+use crate::sdf::Sdf;
 use glam::{DMat3, DVec3, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -104,6 +113,11 @@ pub struct SilhouetteCurve {
     pub cumulative: Vec<f64>,
     /// Extraction counters.
     pub stats: ExtractStats,
+    /// The shape's translation when the curve was extracted: the origin of the frame it was extracted
+    /// and is sampled in ([`extract_silhouette`]).
+    pub origin: Vec3,
+    /// `points` in that frame (relative to `origin`), at the float resolution of the shape's own size.
+    pub local_points: Vec<Vec3>,
 }
 
 /// A point sampled on the silhouette curve.
@@ -121,9 +135,27 @@ pub struct CurveSample {
 
 /// `φ`, `ψ` and their gradients at `x` (world space, translation included).
 pub fn silhouette_functions(shape: &Shape, eye: Vec3, x: Vec3) -> (f32, f32, Vec3, Vec3) {
-    let (phi, g, h) = shape.sdf.hessian(x - shape.translate.value());
+    let t = shape.translate.value();
+    functions_in_frame(&shape.sdf, eye - t, x - t)
+}
+
+/// [`silhouette_functions`] in the shape's own frame (its translation removed from `eye` and `x`).
+fn functions_in_frame(sdf: &Sdf, eye: Vec3, x: Vec3) -> (f32, f32, Vec3, Vec3) {
+    let (phi, g, h) = sdf.hessian(x);
     let v = eye - x;
     (phi, g.dot(v), g, h * v - g)
+}
+
+/// `shape` with its translation removed, and that translation: the frame the curve is extracted in.
+/// Coordinates there are relative to the shape, so a shape placed far from the origin by `translate`
+/// keeps the float resolution of its own size (in world coordinates `φ`, `ψ` and Newton's steps
+/// would carry the rounding of the coordinates' magnitude, which 1,000 radii away leaves the curve
+/// open).
+fn own_frame(shape: &Shape) -> (Shape, Vec3) {
+    let mut local = shape.clone();
+    local.translate = Param3::new([0.0; 3]);
+    local.bounds = shape.sdf.bounds();
+    (local, shape.translate.value())
 }
 
 /// The curve point on the plane `n·x = c` near `x0` by Newton's method on `(φ, ψ, n·x − c)`.
@@ -142,6 +174,12 @@ pub fn solve_on_plane(
     c: f32,
     reach: f32,
 ) -> Option<Vec3> {
+    let t = shape.translate.value();
+    solve_in_frame(&shape.sdf, eye - t, x0 - t, n, c - n.dot(t), reach).map(|x| x + t)
+}
+
+/// [`solve_on_plane`] in the shape's own frame (its translation removed from `eye`, `x0` and `c`).
+fn solve_in_frame(sdf: &Sdf, eye: Vec3, x0: Vec3, n: Vec3, c: f32, reach: f32) -> Option<Vec3> {
     let nd = n.as_dvec3();
     let mut x = x0.as_dvec3();
     // Start on the plane: the other two equations are then solved within it.
@@ -149,7 +187,7 @@ pub fn solve_on_plane(
     let mut prev = f64::INFINITY;
     for _ in 0..24 {
         let xf = x.as_vec3();
-        let (phi, psi, gphi, gpsi) = silhouette_functions(shape, eye, xf);
+        let (phi, psi, gphi, gpsi) = functions_in_frame(sdf, eye, xf);
         let j = DMat3::from_cols(gphi.as_dvec3(), gpsi.as_dvec3(), nd).transpose();
         let det = j.determinant();
         let norm = gphi.length() as f64 * gpsi.length() as f64 * nd.length();
@@ -182,12 +220,16 @@ pub fn solve_on_plane(
     None
 }
 
-/// Extracts the silhouette of `shape` seen from `eye` (see the module notes).
+/// Extracts the silhouette of `shape` seen from `eye` (see the module notes), in the shape's own frame
+/// (its translation removed); `points` are returned in world space, `local_points` in that frame.
 pub fn extract_silhouette(
     shape: &Shape,
     eye: Vec3,
     options: &CurveOptions,
 ) -> Result<SilhouetteCurve> {
+    let world_eye = eye;
+    let (own, origin) = own_frame(shape);
+    let (shape, eye) = (&own, eye - origin);
     let boxes = silhouette_boxes(shape, eye, options.max_depth, 0.0)?;
     let mut stats = ExtractStats {
         boxes: boxes.len(),
@@ -255,11 +297,13 @@ pub fn extract_silhouette(
         })
         .collect();
     Ok(SilhouetteCurve {
-        eye,
-        points,
+        eye: world_eye,
+        points: points.iter().map(|&p| p + origin).collect(),
         segments,
         cumulative,
         stats,
+        origin,
+        local_points: points,
     })
 }
 
@@ -281,7 +325,9 @@ impl SilhouetteCurve {
 
     /// Samples a point on the curve from two uniform numbers (`u[0]` picks the segment by length, `u[1]` the
     /// position along it), with its density per unit length of the true curve (module notes). `None` when the
-    /// curve is empty or the projection onto the curve fails (a rare loss, not re-weighted).
+    /// curve is empty or the projection onto the curve fails (a rare loss, not re-weighted). `shape` is
+    /// the one the curve was extracted from; the projection works in the extraction's frame
+    /// ([`SilhouetteCurve::origin`]) and the sample is returned in world space.
     pub fn sample(&self, shape: &Shape, u: [f32; 2]) -> Option<CurveSample> {
         let total = self.polyline_length();
         if total <= 0.0 {
@@ -293,15 +339,20 @@ impl SilhouetteCurve {
             .partition_point(|&c| c < target)
             .min(self.segments.len() - 1);
         let [ia, ib] = self.segments[i];
-        let (a, b) = (self.points[ia as usize], self.points[ib as usize]);
+        // In the frame the curve was extracted in (see `own_frame`).
+        let (a, b) = (
+            self.local_points[ia as usize],
+            self.local_points[ib as usize],
+        );
+        let eye = self.eye - self.origin;
         let len = (b - a).length();
         let t = (b - a) / len;
         let x0 = a + t * (u[1].clamp(0.0, 1.0) * len);
-        let x = solve_on_plane(shape, self.eye, x0, t, t.dot(x0), len)?;
-        let (_, _, gphi, gpsi) = silhouette_functions(shape, self.eye, x);
+        let x = solve_in_frame(&shape.sdf, eye, x0, t, t.dot(x0), len)?;
+        let (_, _, gphi, gpsi) = functions_in_frame(&shape.sdf, eye, x);
         let tangent = gphi.cross(gpsi).try_normalize()?;
         Some(CurveSample {
-            x,
+            x: x + self.origin,
             tangent,
             pdf: (tangent.dot(t) as f64).abs() / total,
             segment: i,
