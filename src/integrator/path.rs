@@ -103,7 +103,9 @@ pub fn occluded(
         let Some((t0, t1)) = scene.trace_interval(shape, ray, t_max) else {
             continue;
         };
-        match shape.trace(ray, t0, t1, &scene.trace) {
+        // The shape's own tolerances, as `Scene::intersect` traces it: a shadow ray and a camera ray along
+        // the same line agree on what they hit.
+        match shape.trace(ray, t0, t1, &scene.shape_trace(shape)) {
             ShapeTrace::Hit(t) if t < t_max => return true,
             ShapeTrace::Exhausted(_) => counters.exhausted += 1,
             _ => {}
