@@ -10,7 +10,9 @@
 
 mod common;
 
-use common::deriv::{assert_finite, blurred_rel_l2, diff_options, gray, rel_l2, scene_json, seed};
+use common::deriv::{
+    assert_finite, blurred_rel_l2, diff_options, gray, json_point, rel_l2, scene_json, seed,
+};
 use implicit_psdr::integrator::fd::render_with_difference;
 use implicit_psdr::integrator::{RenderOptions, render, render_derivatives_with_boundary};
 use implicit_psdr::scene::Scene;
@@ -34,14 +36,7 @@ enum Floor {
 /// ball, at the floor point below the ball's centre, and the count of rays that ran out of steps.
 /// Everything is moved by `offset`.
 fn floor_point_value(floor: Floor, offset: [f32; 3], spp: u32) -> (f32, u64) {
-    let at = |p: [f32; 3]| {
-        format!(
-            "[{}, {}, {}]",
-            p[0] + offset[0],
-            p[1] + offset[1],
-            p[2] + offset[2]
-        )
-    };
+    let at = |p: [f32; 3]| json_point(p, offset);
     let scene = scene_json(&format!(
         r#"{{"camera": {{"origin": {eye}, "target": {look}, "up": [0, 1, 0], "fov_y": 0.2,
               "width": 4, "height": 4, "filter": "box"}},
@@ -148,13 +143,9 @@ fn rel_mad(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// A ball on a slab under a tilted rectangle light and a dim sky, 16×16 pixels, every position and
-/// length times `s` (radiances unchanged); the slab's edges rounded by `rounding` (before scaling).
-fn ball_on_a_slab(s: f32, rounding: f32) -> Scene {
-    ball_on_a_slab_at(s, rounding, [0.0; 3])
-}
-
-/// [`ball_on_a_slab`] with every position then moved by `offset`.
-fn ball_on_a_slab_at(s: f32, rounding: f32, offset: [f32; 3]) -> Scene {
+/// length times `s` (radiances unchanged), then every position moved by `offset`; the slab's edges
+/// rounded by `rounding` (before scaling).
+fn ball_on_a_slab(s: f32, rounding: f32, offset: [f32; 3]) -> Scene {
     // `[x, y, z]` times `s`, moved by `offset`, as scene JSON.
     let scaled = |p: [f32; 3], s: f32| {
         format!(
@@ -164,6 +155,8 @@ fn ball_on_a_slab_at(s: f32, rounding: f32, offset: [f32; 3]) -> Scene {
             p[2] * s + offset[2]
         )
     };
+    // A size, not a position: not moved.
+    let half = format!("[{}, {}, {}]", 1.6 * s, 0.1 * s, 1.6 * s);
     scene_json(&format!(
         r#"{{"camera": {{"origin": {eye}, "target": {look}, "up": [0, 1, 0], "fov_y": 35,
               "width": 16, "height": 16, "filter": "tent"}},
@@ -182,7 +175,6 @@ fn ball_on_a_slab_at(s: f32, rounding: f32, offset: [f32; 3]) -> Scene {
         ball = scaled([0.1, 0.55, 0.0], s),
         radius = 0.5 * s,
         slab = scaled([0.0, -0.1, 0.0], s),
-        half = format!("[{}, {}, {}]", 1.6 * s, 0.1 * s, 1.6 * s),
         rounding = rounding * s,
         light = scaled([1.2, 3.0, 0.8], s),
         w = 0.8 * s,
@@ -207,7 +199,7 @@ fn at_scale_and_offset(
     offset: [f32; 3],
     seed: u64,
 ) -> (Vec<f64>, Vec<Vec<f64>>, u64) {
-    let mut scene = ball_on_a_slab_at(s, rounding, offset);
+    let mut scene = ball_on_a_slab(s, rounding, offset);
     scene.select_parameters(&LENGTHS.map(String::from)).unwrap();
     // The image of a derivative pass is the primal render's at the same seed and spp.
     let out = render_derivatives_with_boundary(

@@ -26,6 +26,16 @@ pub fn scene_json(json: &str) -> Scene {
     implicit_psdr::scene::parse(json, std::path::Path::new(".")).unwrap()
 }
 
+/// The point `p` moved by `offset`, as scene JSON (`[x, y, z]`).
+pub fn json_point(p: [f32; 3], offset: [f32; 3]) -> String {
+    format!(
+        "[{}, {}, {}]",
+        p[0] + offset[0],
+        p[1] + offset[1],
+        p[2] + offset[2]
+    )
+}
+
 /// Derivative options with `spp` camera samples and `seed`, fixed normalisation.
 pub fn diff_options(spp: u32, seed: u64) -> DiffOptions {
     DiffOptions {

@@ -2,7 +2,7 @@
 //! filter): `tests/hard_cases.rs` checks the complete derivative on them against finite differences,
 //! `tests/gradient.rs` checks that reverse mode's gradient stays finite on some of them.
 
-use super::deriv::scene_json;
+use super::deriv::{json_point, scene_json};
 use implicit_psdr::scene::Scene;
 
 /// A `direct` scene of `size × size` pixels (tent filter) from JSON fragments: the camera's `origin`,
@@ -230,14 +230,7 @@ pub enum Ground {
 /// (a huge box, a plane) nor the distance to the origin, and rays skimming the ground towards the
 /// horizon must finish.
 pub fn ball_over_ground(size: u32, ground: Ground, offset: [f32; 3]) -> Scene {
-    let at = |p: [f32; 3]| {
-        format!(
-            "[{}, {}, {}]",
-            p[0] + offset[0],
-            p[1] + offset[1],
-            p[2] + offset[2]
-        )
-    };
+    let at = |p: [f32; 3]| json_point(p, offset);
     let ground = match ground {
         Ground::Huge => format!(
             r#"{{"type": "box", "center": {}, "half_size": [5000, 0.5, 5000], "rounding": 0.02}}"#,
