@@ -810,3 +810,24 @@ fn grid_lipschitz_bounds_the_gradient_on_each_side() {
         assert!(outside > 1000 && inside > 1000, "{outside} {inside}");
     }
 }
+
+/// A grid's bounds are the cells that can hold its surface, not its whole (padded) box: for a sphere
+/// of radius 0.8 baked over ±1.2 (cells 0.06 wide), the sphere's box grown by at most three cells
+/// (the 4×4×4 control points of a cell near the surface straddle the level up to two cells away).
+/// That the bounds hold every point of the solid is the conformance suite's `bounds_contain_the_solid`.
+#[test]
+fn grid_bounds_hug_the_surface() {
+    let (c, r, cell) = (Vec3::new(0.05, -0.1, 0.0), 0.8, 2.4 / 39.0);
+    let b = baked_sphere().bounds();
+    for a in 0..3 {
+        let (lo, hi) = (c[a] - r, c[a] + r);
+        assert!(
+            b.min[a] <= lo && b.max[a] >= hi,
+            "axis {a}: {b:?} does not hold the sphere"
+        );
+        assert!(
+            lo - b.min[a] <= 3.0 * cell && b.max[a] - hi <= 3.0 * cell,
+            "axis {a}: {b:?} is not within three cells of the sphere's box"
+        );
+    }
+}

@@ -242,6 +242,17 @@ fn window_max(v: &[f32], dims: [usize; 3], axis: usize, w: usize) -> (Vec<f32>, 
     (out, out_dims)
 }
 
+/// The maximum of `v` (dimensions `dims`, x fastest) over windows of `w[a]` entries along each axis `a`,
+/// one per spline patch (`patch_dims` of them).
+fn patch_windows(v: Vec<f32>, dims: [usize; 3], w: [usize; 3], patch_dims: [usize; 3]) -> Vec<f32> {
+    let (mut m, mut d) = (v, dims);
+    for (a, &w) in w.iter().enumerate() {
+        (m, d) = window_max(&m, d, a, w);
+    }
+    debug_assert_eq!(d, patch_dims);
+    m
+}
+
 /// Lipschitz bounds of a grid node over the outside (`φ ≥ 0`) and the inside (`φ ≤ 0`), from each spline
 /// patch's own control points; `level` is the node's iso-level (the function is `spline − level`).
 ///
@@ -273,15 +284,8 @@ pub(super) fn lipschitz_sided(
     let (values, e) = extended_lattice(data);
     let ext = bmax - bmin;
     let patch_dims = data.dims.map(|n| n - 1);
-    // The patch windows of `v` (dimensions `dims`): `w[a]` entries along each axis `a`.
-    let windows = |v: Vec<f32>, dims: [usize; 3], w: [usize; 3]| {
-        let (mut m, mut d) = (v, dims);
-        for (a, &w) in w.iter().enumerate() {
-            (m, d) = window_max(&m, d, a, w);
-        }
-        debug_assert_eq!(d, patch_dims);
-        m
-    };
+    let windows =
+        |v: Vec<f32>, dims: [usize; 3], w: [usize; 3]| patch_windows(v, dims, w, patch_dims);
     let per_axis: [Vec<f32>; 3] = std::array::from_fn(|a| {
         let inv_h = if ext[a] > 0.0 {
             (data.dims[a] - 1) as f32 / ext[a]
@@ -361,9 +365,12 @@ fn face_min(get: impl Fn(usize, usize) -> f32, n1: usize, n2: usize) -> f32 {
     m
 }
 
-/// Box of a grid node of iso-level `level`: the grid box, grown by how far below `level` the spline gets
-/// on its faces (outside, `φ = φ(face) + distance`, so a face value `level − m` puts zeros up to `m`
-/// beyond the face).
+/// Box of a grid node of iso-level `level`. Where the spline gets below `level` on the grid box's faces,
+/// the grid box grown by how far below (outside, `φ = φ(face) + distance`, so a face value `level − m`
+/// puts zeros up to `m` beyond the face). Otherwise every zero lies in a cell whose 4×4×4 control
+/// points straddle the level (the spline on a cell is a convex combination of them): the box of those
+/// cells, often far smaller than the grid box (a baked shape is sampled over padded bounds), so rays
+/// that pass beside the surface skip the shape.
 pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
     if !data.usable() {
         return Aabb::EMPTY;
@@ -380,5 +387,45 @@ pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level:
         m = m.min(face_min(|x, y| data.at(x, y, z), nx, ny));
     }
     let b = Aabb::new(bmin, bmax);
-    b.expanded((level - m).max(0.0) + 1e-6 * b.extent().max_element())
+    let pad = 1e-6 * b.extent().max_element();
+    if m < level {
+        return b.expanded(level - m + pad);
+    }
+    let (values, e) = extended_lattice(data);
+    let patch_dims = data.dims.map(|n| n - 1);
+    let highest = patch_windows(
+        values.iter().map(|v| v - level).collect(),
+        e,
+        [4; 3],
+        patch_dims,
+    );
+    let lowest = patch_windows(
+        values.iter().map(|v| level - v).collect(),
+        e,
+        [4; 3],
+        patch_dims,
+    );
+    // Cell `(x, y, z)` spans lattice coordinates `[x, x + 1] × …`, patch `k` in x-fastest order.
+    let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
+    let mut k = 0;
+    for z in 0..patch_dims[2] {
+        for y in 0..patch_dims[1] {
+            for x in 0..patch_dims[0] {
+                if highest[k] >= 0.0 && lowest[k] >= 0.0 {
+                    for (a, i) in [x, y, z].into_iter().enumerate() {
+                        lo[a] = lo[a].min(i);
+                        hi[a] = hi[a].max(i + 1);
+                    }
+                }
+                k += 1;
+            }
+        }
+    }
+    if lo[0] == usize::MAX {
+        // No cell holds the level: no surface (the grid box, as before, for callers that need one).
+        return b.expanded(pad);
+    }
+    let h = (bmax - bmin) / glam::Vec3::from(patch_dims.map(|n| n.max(1) as f32));
+    let at = |i: [usize; 3]| bmin + h * glam::Vec3::from(i.map(|v| v as f32));
+    Aabb::new(at(lo).max(bmin), at(hi).min(bmax)).expanded(pad)
 }
