@@ -264,7 +264,7 @@ impl Scene {
     }
 
     /// [`Scene::intersect`] for a ray that must resolve detail down to `spread · t` at parameter `t`
-    /// ([`TraceSettings::spread`]): a camera ray, with [`Camera::spread`].
+    /// ([`TraceSettings::spread`]): a camera ray, with [`crate::camera::CameraFrame::spread`].
     pub fn intersect_resolving(&self, ray: &Ray, t_max: f32, spread: f32) -> Intersection {
         let mut nearest = Nearest {
             t: t_max,

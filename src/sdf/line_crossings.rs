@@ -61,7 +61,7 @@ impl LineCrossings {
 impl Sdf {
     /// The crossings of the whole line `ray.o + t ray.d` with the surface `φ = 0`, in closed form, or
     /// `None` for nodes without one (CSG, grids, tori, cylinders, capsules) or when the arithmetic is
-    /// not finite. See the [module docs](self) for the formulas.
+    /// not finite. See the `line_crossings` module docs for the formulas.
     pub fn line_crossings(&self, ray: &Ray) -> Option<LineCrossings> {
         let (o, d) = (ray.o, ray.d);
         let crossings = match self {

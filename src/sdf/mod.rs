@@ -384,7 +384,7 @@ impl Sdf {
     /// Lipschitz bounds of `φ` over the outside (`φ ≥ 0`) and over the inside (`φ ≤ 0`): what sphere
     /// tracing on each side needs (the segment from a point to the nearest surface point stays on its
     /// side). They differ for grids, whose patches around the medial axis (deep inside a shape) have
-    /// steeper splines than any near the surface ([`grid`]'s `lipschitz_sided`); for hard CSG each side
+    /// steeper splines than any near the surface (the grid module's `lipschitz_sided`); for hard CSG each side
     /// is the children's largest on the side the active child is on (min and max keep the sign of the
     /// active child; a subtracted child's sides swap); everything else has one bound for both.
     pub fn lipschitz_sided(&self) -> Lipschitz {

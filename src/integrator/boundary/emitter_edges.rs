@@ -38,7 +38,7 @@
 //! background, `u_D` the background's film point as the interior moves it: the projection of the
 //! attached `x_D` for a finite background, the projection of the fixed direction of the ray for a
 //! background at infinity (the interior projects an escaping camera ray's direction with the lifted
-//! frame, [`crate::integrator::derivative`]). `v > 0` grows the emitter's side, the convention of
+//! frame, [`crate::integrator::diff`]). `v > 0` grows the emitter's side, the convention of
 //! [`super::boundary_velocity`].
 //!
 //! `n_img`: with `T` the unit tangent of the outline and `m` its outward direction (in the rectangle's

@@ -6,7 +6,7 @@
 //!
 //! # The integral
 //!
-//! With the `direct` integrator pixel `j` is (the first vertex by area, as in [`super::super::derivative`])
+//! With the `direct` integrator pixel `j` is (the first vertex by area, as in [`crate::integrator::diff`])
 //!
 //! ```text
 //!   I_j = ∫ dA(x_S) w_j(proj x_S) J_film(x_S) ∫ dA(x_D) f(x_S) G(x_S, x_D) V(x_S, x_D) L_e(x_D)    (1)

@@ -1,6 +1,6 @@
 //! The interior term of forward-mode derivative images (docs/theory.md, "attached vertices" and
 //! "interior integral"). Paths are sampled in `f32` exactly as for the image; their contributions are re-evaluated
-//! with a dual scalar type at attached vertices ([`super::attach`]).
+//! with a dual scalar type at attached vertices ([`crate::integrator::attach`]).
 //!
 //! **The moving pixel filter.** Pixel `j` is `I_j = ∫ w_j(proj x1) J_film(x1) L(x̄) dA(x1)` over the
 //! reference surface (`J_film` the film area per unit area of `x1`; `L` includes the area factors `J` of
@@ -24,7 +24,7 @@
 //! vertex's area factor, which `L` also carries) estimated like `F_j` with `L = 1` (primal 1): both terms,
 //! `(1/spp) Σ_{s ∈ j} ∂J₁` and the moving-filter term. The pixel's derivative is `∂F_j − I_j ∂W_j`, a
 //! control variate: `Σ_s (∂L_s − I_j ∂J₁)` and `Σ_s (L_s − I_j) ∂(w_j J_film)_s / …`. `E[∂W_j] = 0` only
-//! with `W`'s own primary boundary term ([`super::boundary::primary::PrimaryTerm::coverage`]), which
+//! with `W`'s own primary boundary term ([`crate::integrator::boundary::primary::PrimaryTerm::coverage`]), which
 //! [`super::render_derivatives`] adds; the interior alone is biased near silhouettes.
 //!
 //! Parameters are processed in passes of the scalar type's width (`DualN<N>` carries `N` directions); each
