@@ -275,49 +275,42 @@ fn light_touching_an_occluder() {
     );
 }
 
-/// A ball over a floor box 10,000 units wide ([`hard_scenes::ball_over_ground`]): the tolerances are
-/// the ball's and the float resolution's where the rays are, not the floor's size.
-#[test]
-fn huge_floor() {
-    let s = hard_scenes::ball_over_ground(32, Ground::Huge, [0.0; 3]);
+/// [`hard_scenes::ball_over_ground`] with `ground`, moved by `offset`, against finite differences for
+/// the ball's and the light's position, with the bounds above.
+fn measure_ground(label: &str, ground: Ground, offset: [f32; 3], seed: u64) {
+    let s = hard_scenes::ball_over_ground(32, ground, offset);
     measure(
-        "huge_floor",
+        label,
         &s,
         &[
             check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
             check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
         ],
-        21,
+        seed,
     );
+}
+
+/// A ball over a floor box 10,000 units wide ([`hard_scenes::ball_over_ground`]): the tolerances are
+/// the ball's and the float resolution's where the rays are, not the floor's size.
+#[test]
+fn huge_floor() {
+    measure_ground("huge_floor", Ground::Huge, [0.0; 3], 21);
 }
 
 /// The same ball over the unbounded plane `y = 0`: rays skimming it to the horizon finish.
 #[test]
 fn plane_floor() {
-    let s = hard_scenes::ball_over_ground(32, Ground::Plane, [0.0; 3]);
-    measure(
-        "plane_floor",
-        &s,
-        &[
-            check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
-            check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
-        ],
-        22,
-    );
+    measure_ground("plane_floor", Ground::Plane, [0.0; 3], 22);
 }
 
 /// The ball over the huge floor with the whole scene moved 1,000 units from the origin (along
 /// (1, −0.7, 0.3)), where the float resolution is 1.2·10⁻⁴.
 #[test]
 fn far_from_the_origin() {
-    let s = hard_scenes::ball_over_ground(32, Ground::Huge, [1000.0, -700.0, 300.0]);
-    measure(
+    measure_ground(
         "far_from_the_origin",
-        &s,
-        &[
-            check("ball.center.x", 0.02, L2_BALL, SUM_BALL),
-            check("light.center.x", 0.05, L2_LIGHT, SUM_LIGHT),
-        ],
+        Ground::Huge,
+        [1000.0, -700.0, 300.0],
         23,
     );
 }

@@ -105,7 +105,9 @@ pub struct ExtractStats {
 pub struct SilhouetteCurve {
     /// The camera centre the curve is the silhouette for.
     pub eye: Vec3,
-    /// Vertices, each on `{φ = 0, ψ = 0}` up to the Newton tolerance.
+    /// Vertices, each on `{φ = 0, ψ = 0}` up to the Newton tolerance, relative to `origin` (the frame
+    /// the curve is extracted and sampled in, at the float resolution of the shape's own size; world
+    /// positions: [`SilhouetteCurve::world_points`]).
     pub points: Vec<Vec3>,
     /// Segments as pairs of indices into `points`.
     pub segments: Vec<[u32; 2]>,
@@ -116,8 +118,6 @@ pub struct SilhouetteCurve {
     /// The shape's translation when the curve was extracted: the origin of the frame it was extracted
     /// and is sampled in ([`extract_silhouette`]).
     pub origin: Vec3,
-    /// `points` in that frame (relative to `origin`), at the float resolution of the shape's own size.
-    pub local_points: Vec<Vec3>,
 }
 
 /// A point sampled on the silhouette curve.
@@ -221,7 +221,7 @@ fn solve_in_frame(sdf: &Sdf, eye: Vec3, x0: Vec3, n: Vec3, c: f32, reach: f32) -
 }
 
 /// Extracts the silhouette of `shape` seen from `eye` (see the module notes), in the shape's own frame
-/// (its translation removed); `points` are returned in world space, `local_points` in that frame.
+/// (its translation removed): `points` are relative to `origin`.
 pub fn extract_silhouette(
     shape: &Shape,
     eye: Vec3,
@@ -298,16 +298,20 @@ pub fn extract_silhouette(
         .collect();
     Ok(SilhouetteCurve {
         eye: world_eye,
-        points: points.iter().map(|&p| p + origin).collect(),
+        points,
         segments,
         cumulative,
         stats,
         origin,
-        local_points: points,
     })
 }
 
 impl SilhouetteCurve {
+    /// The vertices in world space (`points` moved by `origin`, rounded to the world's resolution).
+    pub fn world_points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.points.iter().map(|&p| p + self.origin)
+    }
+
     /// Total length `L` of the polyline.
     pub fn polyline_length(&self) -> f64 {
         self.cumulative.last().copied().unwrap_or(0.0)
@@ -340,10 +344,7 @@ impl SilhouetteCurve {
             .min(self.segments.len() - 1);
         let [ia, ib] = self.segments[i];
         // In the frame the curve was extracted in (see `own_frame`).
-        let (a, b) = (
-            self.local_points[ia as usize],
-            self.local_points[ib as usize],
-        );
+        let (a, b) = (self.points[ia as usize], self.points[ib as usize]);
         let eye = self.eye - self.origin;
         let len = (b - a).length();
         let t = (b - a) / len;

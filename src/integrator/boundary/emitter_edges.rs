@@ -444,16 +444,9 @@ fn sample<S: Directions>(
     let off = BACKGROUND_OFFSET_PIXELS;
     let ray = frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y));
     let delta = background_offset(scene, dist, frame.focal);
-    let Some(l_bg) = background_radiance(
-        scene,
-        ray,
-        frame.spread(ray.d),
-        dist,
-        delta,
-        sampler,
-        record,
-        counters,
-    ) else {
+    let Some(l_bg) =
+        background_radiance(scene, &frame, ray, dist, delta, sampler, record, counters)
+    else {
         return;
     };
     // The ray must have passed the emitter (it starts ε pixels off its outline).

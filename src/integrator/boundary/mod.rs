@@ -166,21 +166,22 @@ pub(crate) fn projection_jacobian(
 }
 
 /// The background radiance beyond an edge at distance `dist` from the eye, seen along the camera `ray`
-/// just outside it (`delta` from [`background_offset`]; `spread`, the ray's
-/// [`crate::camera::CameraFrame::spread`]): `None` when something nearer hides the edge; else one
+/// just outside it (`delta` from [`background_offset`]; `frame` the camera's, whose
+/// [`CameraFrame::spread`] the ray resolves): `None` when something nearer hides the edge; else one
 /// camera path of the scene's own estimator, left in `record` (its first vertex is `x_D`), and its
 /// detached radiance.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn background_radiance(
     scene: &Scene,
+    frame: &CameraFrame<f32>,
     ray: Ray,
-    spread: f32,
     dist: f32,
     delta: f32,
     sampler: &mut Sampler,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> Option<glam::Vec3> {
+    let spread = frame.spread(ray.d);
     let margin = 4.0 * delta + 8.0 * camera_ray_eps(scene, spread, dist);
     if occluded(scene, &ray, dist - margin, None, counters) {
         return None;

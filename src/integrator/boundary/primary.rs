@@ -387,16 +387,9 @@ fn sample<S: Directions>(
         return;
     };
     let ray = Ray::new(eye, d_out);
-    let Some(l_bg) = background_radiance(
-        scene,
-        ray,
-        frame.spread(ray.d),
-        dist,
-        delta,
-        sampler,
-        record,
-        counters,
-    ) else {
+    let Some(l_bg) =
+        background_radiance(scene, &frame, ray, dist, delta, sampler, record, counters)
+    else {
         return;
     };
     // v = −∂πh / rate, relative to the background's own parametrisation (module docs): the ray from the
