@@ -18,8 +18,9 @@ use crate::error::Result;
 use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};
-use crate::sdf::{Lipschitz, Sdf};
-use crate::trace::{ShapeTrace, TraceSettings, first_crossing};
+use crate::sdf::{EmptySpace, Lipschitz, Sdf};
+use crate::trace::{ShapeTrace, TraceSettings, first_crossing_skipping};
+use std::sync::Arc;
 
 /// An implicit surface with its material, rigidly translated by `translate` (zero unless a derivative or a
 /// finite difference moves the whole shape): the surface is `{x : sdf(x − translate) = 0}`.
@@ -40,6 +41,9 @@ pub struct Shape {
     /// Whether the surface may have crease edges ([`Sdf::creases`]): only next to one can a point pushed
     /// off one face still lie on another ([`Scene::offset_origin`]).
     pub creased: bool,
+    /// Where a grid shape certainly has no surface ([`EmptySpace`]), so that tracing skips it; `None`
+    /// for every other shape.
+    pub empty_space: Option<Arc<EmptySpace>>,
 }
 
 impl Shape {
@@ -55,6 +59,7 @@ impl Shape {
         let bounds = Aabb::new(local.min + t, local.max + t);
         let lipschitz = sdf.lipschitz_sided();
         let creased = sdf.creases().is_some();
+        let empty_space = EmptySpace::of(&sdf).map(Arc::new);
         Self {
             name: name.into(),
             sdf,
@@ -63,6 +68,7 @@ impl Shape {
             bounds,
             lipschitz,
             creased,
+            empty_space,
         }
     }
 
@@ -105,9 +111,10 @@ impl Shape {
     /// First crossing of the surface along `ray` in `[t0, t1]` (see [`first_crossing`]).
     #[inline]
     pub fn trace(&self, ray: &Ray, t0: f32, t1: f32, settings: &TraceSettings) -> ShapeTrace {
-        first_crossing(
+        first_crossing_skipping(
             &self.sdf,
             self.lipschitz,
+            self.empty_space.as_deref(),
             &self.local_ray(ray),
             t0,
             t1,

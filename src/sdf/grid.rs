@@ -281,6 +281,41 @@ pub(super) fn lipschitz_sided(
     if !data.usable() {
         return (1.0, 1.0);
     }
+    let (mut outside, mut inside) = (0.0f32, 0.0f32);
+    for patch in patch_lipschitz(data, bmin, bmax, level) {
+        if patch.outside {
+            outside = outside.max(patch.bound);
+        }
+        if patch.inside {
+            inside = inside.max(patch.bound);
+        }
+    }
+    // Both are at least 1: the face patches count for both sides, and beyond the box the function grows
+    // by the distance to it.
+    (outside, inside)
+}
+
+/// The Lipschitz bound of one spline patch (see [`lipschitz_sided`]) and the sides of the surface it
+/// reaches.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct PatchLipschitz {
+    /// Bound of `|∇φ|` over the patch (and beyond the box's face, for a patch on it), with a few ulps
+    /// of headroom: the bounds are tight and the tracer divides by them.
+    pub bound: f32,
+    /// Whether the patch can hold points outside (`φ ≥ 0`): a control point at or above the level, or
+    /// a patch on the box's faces.
+    pub outside: bool,
+    /// Whether it can hold points inside (`φ ≤ 0`).
+    pub inside: bool,
+}
+
+/// [`PatchLipschitz`] of every patch (lattice cell), x fastest. `data` must be usable.
+pub(super) fn patch_lipschitz(
+    data: &GridData,
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+    level: f32,
+) -> Vec<PatchLipschitz> {
     let (values, e) = extended_lattice(data);
     let ext = bmax - bmin;
     let patch_dims = data.dims.map(|n| n - 1);
@@ -311,7 +346,7 @@ pub(super) fn lipschitz_sided(
     });
     let highest = windows(values.iter().map(|v| v - level).collect(), e, [4; 3]);
     let lowest = windows(values.iter().map(|v| level - v).collect(), e, [4; 3]);
-    let (mut outside, mut inside) = (0.0f32, 0.0f32);
+    let mut out = Vec::with_capacity(patch_dims.iter().product());
     let mut k = 0;
     for z in 0..patch_dims[2] {
         for y in 0..patch_dims[1] {
@@ -327,20 +362,16 @@ pub(super) fn lipschitz_sided(
                         bound = bound.max(sum - sq[a] + 1.0);
                     }
                 }
-                if on_face || highest[k] >= 0.0 {
-                    outside = outside.max(bound);
-                }
-                if on_face || lowest[k] >= 0.0 {
-                    inside = inside.max(bound);
-                }
+                out.push(PatchLipschitz {
+                    bound: bound.sqrt() * (1.0 + 1e-6),
+                    outside: on_face || highest[k] >= 0.0,
+                    inside: on_face || lowest[k] >= 0.0,
+                });
                 k += 1;
             }
         }
     }
-    // Both are at least 1: the face patches count for both sides, and beyond the box the function grows
-    // by the distance to it. A few ulps of headroom: the bounds are tight and the tracer divides by them.
-    let finish = |b2: f32| b2.sqrt() * (1.0 + 1e-6);
-    (finish(outside), finish(inside))
+    out
 }
 
 /// `min` over the ghost-extended 2-D lattice of one face layer: a lower bound of the spline on that face
@@ -365,32 +396,10 @@ fn face_min(get: impl Fn(usize, usize) -> f32, n1: usize, n2: usize) -> f32 {
     m
 }
 
-/// Box of a grid node of iso-level `level`. Where the spline gets below `level` on the grid box's faces,
-/// the grid box grown by how far below (outside, `φ = φ(face) + distance`, so a face value `level − m`
-/// puts zeros up to `m` beyond the face). Otherwise every zero lies in a cell whose 4×4×4 control
-/// points straddle the level (the spline on a cell is a convex combination of them): the box of those
-/// cells, often far smaller than the grid box (a baked shape is sampled over padded bounds), so rays
-/// that pass beside the surface skip the shape.
-pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
-    if !data.usable() {
-        return Aabb::EMPTY;
-    }
-    let [nx, ny, nz] = data.dims;
-    let mut m = f32::INFINITY;
-    for x in [0, nx - 1] {
-        m = m.min(face_min(|y, z| data.at(x, y, z), ny, nz));
-    }
-    for y in [0, ny - 1] {
-        m = m.min(face_min(|x, z| data.at(x, y, z), nx, nz));
-    }
-    for z in [0, nz - 1] {
-        m = m.min(face_min(|x, y| data.at(x, y, z), nx, ny));
-    }
-    let b = Aabb::new(bmin, bmax);
-    let pad = 1e-6 * b.extent().max_element();
-    if m < level {
-        return b.expanded(level - m + pad);
-    }
+/// Whether the spline may take the value `level` on each lattice cell (x fastest, `n − 1` cells per
+/// axis): whether the cell's 4×4×4 control points (ghosts included) straddle the level. The spline on a
+/// cell is a convex combination of them, so every other cell lies strictly on one side.
+pub(super) fn straddling_cells(data: &GridData, level: f32) -> Vec<bool> {
     let (values, e) = extended_lattice(data);
     let patch_dims = data.dims.map(|n| n - 1);
     let highest = patch_windows(
@@ -405,13 +414,55 @@ pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level:
         [4; 3],
         patch_dims,
     );
+    highest
+        .iter()
+        .zip(&lowest)
+        .map(|(&h, &l)| h >= 0.0 && l >= 0.0)
+        .collect()
+}
+
+/// The least value of the spline on the grid box's faces (a lower bound: each face's ghost-extended
+/// control points). Below `level`, the surface reaches beyond the box.
+pub(super) fn faces_min(data: &GridData) -> f32 {
+    let [nx, ny, nz] = data.dims;
+    let mut m = f32::INFINITY;
+    for x in [0, nx - 1] {
+        m = m.min(face_min(|y, z| data.at(x, y, z), ny, nz));
+    }
+    for y in [0, ny - 1] {
+        m = m.min(face_min(|x, z| data.at(x, y, z), nx, nz));
+    }
+    for z in [0, nz - 1] {
+        m = m.min(face_min(|x, y| data.at(x, y, z), nx, ny));
+    }
+    m
+}
+
+/// Box of a grid node of iso-level `level`. Where the spline gets below `level` on the grid box's faces,
+/// the grid box grown by how far below (outside, `φ = φ(face) + distance`, so a face value `level − m`
+/// puts zeros up to `m` beyond the face). Otherwise every zero lies in a cell whose 4×4×4 control
+/// points straddle the level (the spline on a cell is a convex combination of them): the box of those
+/// cells, often far smaller than the grid box (a baked shape is sampled over padded bounds), so rays
+/// that pass beside the surface skip the shape.
+pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
+    if !data.usable() {
+        return Aabb::EMPTY;
+    }
+    let m = faces_min(data);
+    let b = Aabb::new(bmin, bmax);
+    let pad = 1e-6 * b.extent().max_element();
+    if m < level {
+        return b.expanded(level - m + pad);
+    }
+    let patch_dims = data.dims.map(|n| n - 1);
+    let straddling = straddling_cells(data, level);
     // Cell `(x, y, z)` spans lattice coordinates `[x, x + 1] × …`, patch `k` in x-fastest order.
     let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
     let mut k = 0;
     for z in 0..patch_dims[2] {
         for y in 0..patch_dims[1] {
             for x in 0..patch_dims[0] {
-                if highest[k] >= 0.0 && lowest[k] >= 0.0 {
+                if straddling[k] {
                     for (a, i) in [x, y, z].into_iter().enumerate() {
                         lo[a] = lo[a].min(i);
                         hi[a] = hi[a].max(i + 1);

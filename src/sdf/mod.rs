@@ -29,6 +29,7 @@
 mod bake;
 mod creases;
 mod csg;
+mod empty_space;
 mod grid;
 mod grid_edit;
 pub mod interval;
@@ -40,6 +41,7 @@ mod validate;
 
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use creases::surfaces_may_meet;
+pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
 

@@ -8,13 +8,24 @@
 //! Each step is `g/L` (Hart 1996), `L` the Lipschitz bound of `φ`, which cannot cross the surface. Where
 //! that step falls below `64 h`, `h` the resolution (the local tolerance [`TraceSettings::eps_at`] where
 //! the ray is, below written `eps`), the tracer *creeps* instead: steps of the larger of `g/L` and a
-//! creep step that starts at `h` and doubles on each consecutive creep step up to `64 h`, until `g`
-//! changes sign (an overshoot into the shape is fine: it brackets the crossing). The bracket is then
-//! refined with the Illinois variant of regula falsi. Creeping with growing steps keeps grazing rays
-//! cheap: a ray skimming a unit sphere at `eps` stays within `eps` of it for `2√(2 eps)` ≈ 280 `eps`, and
-//! a ray running parallel to a wall a few `eps` from it (leaving a wall of a room at a shallow angle,
-//! a line tangent along a rounded edge) would advance by those few `eps` per step with `g/L` alone,
-//! and by `64 eps` creeping.
+//! creep step, until `g` changes sign (an overshoot into the shape is fine: it brackets the crossing).
+//! The creep step aims one and a half times as far as the secant through the last two values puts the
+//! crossing (plus `h`) when `g` is falling, takes the full `64 h` when `g` is rising (the ray is
+//! leaving a surface), and otherwise starts at `h` and doubles on each consecutive creep step; it is
+//! never more than `64 h`. The bracket is then refined with the Illinois variant of regula falsi.
+//! Creeping keeps grazing rays cheap: a ray skimming a unit sphere at `eps` stays within `eps` of it
+//! for `2√(2 eps)` ≈ 280 `eps`, and a ray running parallel to a wall a few `eps` from it (leaving a wall
+//! of a room at a shallow angle, a line tangent along a rounded edge) would advance by those few `eps`
+//! per step with `g/L` alone, and by up to `64 eps` creeping. Aiming at the secant's crossing, a ray
+//! approaching a surface needs one or two creep steps instead of the six of the doubling sequence, and
+//! a ray leaving one (every shadow and bounce ray) leaves the creep zone in two or three.
+//!
+//! # Grid shapes
+//!
+//! A grid shape's tracer also skips the lattice cells that certainly hold no surface and steps with the
+//! Lipschitz bound of the cells around the ray rather than the grid's largest ([`EmptySpace`]; the
+//! bound of a cell's neighbourhood holds within one cell of it, so a step longer than a cell takes the
+//! larger of that cell and the global step).
 //!
 //! # Closed forms
 //!
@@ -72,7 +83,7 @@
 //!   within the probe distance, the crossing was a graze at the noise level and is dropped.
 
 use crate::math::Ray;
-use crate::sdf::{Lipschitz, Sdf};
+use crate::sdf::{Candidate, EmptySpace, LatticeRay, Lipschitz, Sdf};
 
 /// Tolerances of the tracer.
 ///
@@ -168,6 +179,10 @@ pub enum ShapeTrace {
 /// is shorter than the step: on a smooth surface of radius `R` that is a dip of depth `≲ (32 eps)² / 2R`
 /// below the surface, below `eps` whenever `R ≳ 500 eps`.
 const MAX_CREEP: f32 = 64.0;
+/// How far past the secant's estimate of the crossing a step in the creep zone aims, as a multiple of
+/// the estimate (plus one tolerance): far enough that an estimate a little short still brackets the
+/// crossing, close enough that refinement starts from a narrow bracket.
+const AIM_PAST: f32 = 1.5;
 /// Cap of the interval-dependent part of the step budget ([`Marcher::budget`]), in units of
 /// `max_steps`: bounds the work on a pathological interval (a tolerance floor far below the shape's
 /// size).
@@ -176,6 +191,13 @@ const MAX_EXTRA_BUDGET: f32 = 16.0;
 const REFINE_FRACTION: f32 = 0.01;
 /// Refinement iterations (Illinois converges superlinearly: 4 to 8 are typical).
 const REFINE_ITERATIONS: u32 = 40;
+
+/// No cell of an [`EmptySpace`] known: look it up at the next step.
+const NO_CELL: Candidate = Candidate {
+    t: f32::NEG_INFINITY,
+    until: f32::NEG_INFINITY,
+    inv_lipschitz: [0.0; 2],
+};
 
 /// The side of the surface a ray is on at some `t`, and where marching may resume from.
 #[derive(Copy, Clone, Debug)]
@@ -225,6 +247,8 @@ fn min_progress(t: f32) -> f32 {
 struct Marcher<'a> {
     sdf: &'a Sdf,
     ray: &'a Ray,
+    /// The shape's certified empty cells, and the ray in their lattice coordinates: marching skips them.
+    space: Option<(&'a EmptySpace, LatticeRay)>,
     /// Inverse Lipschitz bounds outside and inside.
     inv_l: [f32; 2],
     t1: f32,
@@ -256,6 +280,7 @@ impl<'a> Marcher<'a> {
         Self {
             sdf,
             ray,
+            space: None,
             inv_l: [lipschitz.outside, lipschitz.inside].map(inverse_lipschitz),
             t1,
             settings,
@@ -347,6 +372,11 @@ impl<'a> Marcher<'a> {
         // Creep step inside the zone `g/L < MAX_CREEP · eps`: starts at `eps`, doubles on each consecutive
         // creep step up to `MAX_CREEP · eps`, resets when the ray leaves the zone.
         let mut creep = self.eps(t);
+        // The previous sample on this side, for the secant's estimate of where the surface is.
+        let mut previous: Option<(f32, f32)> = None;
+        // The straddling cell of `space` the ray is in, until it leaves it.
+        let mut cell = NO_CELL;
+        let side = usize::from(sign < 0.0);
         loop {
             // Also stops on a NaN parameter.
             if t.partial_cmp(&self.t1) != Some(std::cmp::Ordering::Less) {
@@ -355,15 +385,45 @@ impl<'a> Marcher<'a> {
             if self.steps_left == 0 {
                 return Crossing::Exhausted(t);
             }
-            let safe = g * inv_l;
+            if let Some((space, lattice_ray)) = &self.space
+                && t >= cell.until
+            {
+                // Out of the surface's cells the ray jumps to the next cell that can hold it.
+                let Some(found) = space.first_candidate_lattice(lattice_ray, t, self.t1) else {
+                    return Crossing::Miss;
+                };
+                cell = found;
+                if found.t > t {
+                    let g_next = sign * self.phi(found.t);
+                    if g_next > 0.0 {
+                        (t, g) = (found.t, g_next);
+                        previous = None;
+                        creep = self.eps(t);
+                        continue;
+                    }
+                    cell = NO_CELL;
+                }
+            }
+            let safe = self.safe_step(g, inv_l, cell.inv_lipschitz[side]);
             let eps = self.eps(t);
             let step = if safe >= MAX_CREEP * eps {
                 creep = eps;
                 safe
             } else {
-                let s = creep.max(safe);
+                let s = match previous {
+                    // Approaching the surface: aim past the secant's root (an overshoot brackets the
+                    // crossing for refinement) instead of creeping up to it from `eps`.
+                    Some((tp, gp)) if gp > g => {
+                        let root = g * (t - tp) / (gp - g);
+                        (AIM_PAST * root + eps).min(MAX_CREEP * eps).max(creep)
+                    }
+                    // Moving away from it (leaving a surface): nothing nearer to resolve than what
+                    // the largest creep step may skip anyway.
+                    Some((_, gp)) if g > gp => MAX_CREEP * eps,
+                    _ => creep,
+                };
                 creep = (2.0 * creep).min(MAX_CREEP * eps);
-                s
+                s.max(safe)
             }
             .max(min_progress(t));
             let t_next = (t + step).min(self.t1);
@@ -372,6 +432,7 @@ impl<'a> Marcher<'a> {
                 return Crossing::Miss;
             }
             if g_next > 0.0 {
+                previous = Some((t, g));
                 t = t_next;
                 g = g_next;
                 continue;
@@ -388,6 +449,7 @@ impl<'a> Marcher<'a> {
             t = from.t;
             g = from.g;
             creep = self.eps(t);
+            previous = None;
         }
     }
 
@@ -439,6 +501,38 @@ impl<'a> Marcher<'a> {
         }
         let t = if ga.abs() < gb.abs() { a } else { b };
         (t, b, gb)
+    }
+
+    /// The step that cannot cross the surface from a point where `sign·φ = g`: `g/L` with the global
+    /// bound (`inv_l = 1/L`), or with the bound of the grid cells around the point (`local`, 0 when
+    /// unknown), which holds within one cell of it: the local step if it stays within that reach,
+    /// else at least the reach itself.
+    #[inline]
+    fn safe_step(&self, g: f32, inv_l: f32, local: f32) -> f32 {
+        let global = g * inv_l;
+        match &self.space {
+            Some((space, _)) if local > 0.0 => {
+                let near = g * local;
+                if near <= space.cell_size {
+                    near.max(global)
+                } else {
+                    global.max(space.cell_size)
+                }
+            }
+            _ => global,
+        }
+    }
+
+    /// The first crossing in `[t0, t1]`, as [`sphere_trace`] reports it.
+    fn first(&mut self, t0: f32) -> ShapeTrace {
+        let Some(side) = self.start(t0) else {
+            return ShapeTrace::Miss;
+        };
+        match self.next_crossing(side) {
+            Crossing::Hit { t, .. } => ShapeTrace::Hit(t),
+            Crossing::Miss => ShapeTrace::Miss,
+            Crossing::Exhausted(t) => ShapeTrace::Exhausted(t),
+        }
     }
 
     /// The side at `t0`, or `None` for an empty interval or a NaN value.
@@ -526,10 +620,35 @@ pub fn first_crossing(
     t1: f32,
     settings: &TraceSettings,
 ) -> ShapeTrace {
+    first_crossing_skipping(sdf, lipschitz, None, ray, t0, t1, settings)
+}
+
+/// [`first_crossing`], skipping the cells of `space` that certainly hold no surface (a grid shape's
+/// [`EmptySpace`], `ray` in the shape's frame).
+pub fn first_crossing_skipping(
+    sdf: &Sdf,
+    lipschitz: impl Into<Lipschitz>,
+    space: Option<&EmptySpace>,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+) -> ShapeTrace {
+    let t0 = match space {
+        Some(space) => match space.first_candidate(ray, t0, t1) {
+            Some(t) => t,
+            None => return ShapeTrace::Miss,
+        },
+        None => t0,
+    };
     match closed_form(sdf, ray, t0, t1, settings, true) {
         Some((_, 0)) => ShapeTrace::Miss,
         Some((t, _)) => ShapeTrace::Hit(t[0]),
-        None => sphere_trace(sdf, lipschitz, ray, t0, t1, settings),
+        None => {
+            let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
+            m.space = space.map(|s| (s, s.lattice_ray(ray)));
+            m.first(t0)
+        }
     }
 }
 
@@ -563,15 +682,7 @@ pub fn sphere_trace(
     t1: f32,
     settings: &TraceSettings,
 ) -> ShapeTrace {
-    let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
-    let Some(side) = m.start(t0) else {
-        return ShapeTrace::Miss;
-    };
-    match m.next_crossing(side) {
-        Crossing::Hit { t, .. } => ShapeTrace::Hit(t),
-        Crossing::Miss => ShapeTrace::Miss,
-        Crossing::Exhausted(t) => ShapeTrace::Exhausted(t),
-    }
+    Marcher::new(sdf, lipschitz.into(), ray, t1, settings).first(t0)
 }
 
 /// Every zero crossing of `sdf` along `ray` in `[t0, t1]`, in increasing order.

@@ -1,0 +1,340 @@
+//! Empty-space skipping for grid shapes: where along a ray the surface can first be.
+//!
+//! A grid's spline on a lattice cell is a convex combination of the cell's 4×4×4 control points, so a
+//! cell whose control points all lie on one side of the level holds no surface (it is *empty*); only the
+//! *straddling* cells can. Each cell stores its chessboard distance, in cells, to the nearest straddling
+//! one: a cell at distance `k ≥ 1` is the centre of a cube of `2k − 1` cells on a side that are all
+//! empty, and a ray inside it can jump to where it leaves the cube without evaluating the spline. Sphere
+//! tracing then starts at the first straddling cell the ray meets, not where it enters the shape's
+//! bounds: the spline's Lipschitz bound (up to `√3` around a baked shape's kinks) makes the steps there
+//! short, and each step is an evaluation of 64 control points.
+//!
+//! It applies when the shape's node is a grid under similarity transforms (and names), and when the
+//! surface does not reach beyond the grid box (beyond it `φ = φ(clamp(x)) + |x − clamp(x)|`, positive
+//! whenever the spline stays above the level on the box's faces; otherwise no skipping). Parameters that
+//! change the grid, its level or its transforms rebuild it with the shape.
+
+use super::{Sdf, grid, transform};
+use crate::math::{Ray, Vec3};
+use std::cmp::Ordering;
+
+/// The chessboard distance map of a grid shape's straddling cells, and the map from the shape's frame to
+/// lattice coordinates (cell `(i, j, k)` spans `[i, i + 1] × [j, j + 1] × [k, k + 1]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmptySpace {
+    /// Rows of the linear part of the map from the shape's frame to lattice coordinates.
+    to_lattice: glam::Mat3,
+    /// Its offset: `u = to_lattice · x + offset`.
+    offset: glam::Vec3,
+    /// Cells per axis (`n − 1` for `n` samples).
+    cells: [usize; 3],
+    /// Per cell (x fastest), the chessboard distance to the nearest straddling cell, saturated at 255.
+    distance: Vec<u8>,
+    /// Per cell, the inverse Lipschitz bounds `[outside, inside]` over the cell and its 26 neighbours:
+    /// valid within one cell of any point of the cell.
+    inv_lipschitz: Vec<[f32; 2]>,
+    /// The shortest edge of a cell in the shape's frame: how far from a point the neighbourhood's
+    /// bounds certainly hold.
+    pub cell_size: f32,
+}
+
+/// Where a ray can first meet the surface ([`EmptySpace::first_candidate_lattice`]).
+#[derive(Copy, Clone, Debug)]
+pub struct Candidate {
+    /// The ray parameter.
+    pub t: f32,
+    /// Where the ray leaves the straddling cell it is in at `t`: nothing to skip before.
+    pub until: f32,
+    /// Inverse Lipschitz bounds `[outside, inside]` that hold within [`EmptySpace::cell_size`] of any
+    /// point of that cell.
+    pub inv_lipschitz: [f32; 2],
+}
+
+impl EmptySpace {
+    /// The empty space of `sdf`, if it is a grid under similarity transforms (and names) whose surface
+    /// stays inside the grid box; `None` otherwise.
+    pub fn of(sdf: &Sdf) -> Option<Self> {
+        match sdf {
+            Sdf::Named { child, .. } => Self::of(child),
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                child,
+            } => {
+                let inner = Self::of(child)?;
+                // p_child = R⁻¹ (x − t) / s.
+                let (sin, cos) = angle.value.to_radians().sin_cos();
+                let inverse = |v: glam::Vec3| -> glam::Vec3 {
+                    transform::rotate(Vec3::<f32>::from(v), *axis, cos, -sin).into()
+                };
+                let s = scale.value;
+                if !(s > 0.0 && s.is_finite()) {
+                    return None;
+                }
+                let rotation = glam::Mat3::from_cols(
+                    inverse(glam::Vec3::X),
+                    inverse(glam::Vec3::Y),
+                    inverse(glam::Vec3::Z),
+                ) * (1.0 / s);
+                let child_offset = -(rotation * translate.value());
+                Some(Self {
+                    to_lattice: inner.to_lattice * rotation,
+                    offset: inner.to_lattice * child_offset + inner.offset,
+                    cell_size: inner.cell_size * s,
+                    ..inner
+                })
+            }
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+                level,
+                ..
+            } => {
+                if !data.usable() || grid::faces_min(data) < level.value {
+                    return None;
+                }
+                let ext = *bbox_max - *bbox_min;
+                if !(ext.cmpgt(glam::Vec3::ZERO).all() && ext.is_finite()) {
+                    return None;
+                }
+                let cells = data.dims.map(|n| n - 1);
+                let scale = glam::Vec3::from(cells.map(|c| c as f32)) / ext;
+                let straddling = grid::straddling_cells(data, level.value);
+                let patches = grid::patch_lipschitz(data, *bbox_min, *bbox_max, level.value);
+                Some(Self {
+                    to_lattice: glam::Mat3::from_diagonal(scale),
+                    offset: -*bbox_min * scale,
+                    cells,
+                    distance: chessboard_distance(&straddling, cells),
+                    inv_lipschitz: neighbourhood_inverse_bounds(&patches, cells),
+                    cell_size: (ext / glam::Vec3::from(cells.map(|c| c as f32))).min_element(),
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// The ray (in the shape's frame) in lattice coordinates, with the same parameter `t`.
+    #[inline]
+    pub fn lattice_ray(&self, ray: &Ray) -> LatticeRay {
+        let (o, d) = (
+            self.to_lattice * ray.o + self.offset,
+            self.to_lattice * ray.d,
+        );
+        let extent = glam::Vec3::from(self.cells.map(|c| c as f32));
+        let (enter, exit) = slab(o, d, glam::Vec3::ZERO, extent).unwrap_or((1.0, 0.0));
+        LatticeRay {
+            o,
+            d,
+            inv: d.recip(),
+            enter,
+            exit,
+        }
+    }
+
+    /// The first parameter in `[t0, t1]` from which the ray (in the shape's frame) can meet the surface:
+    /// `t0` itself when it starts in a straddling cell, `None` when every cell it crosses up to `t1` is
+    /// empty. Nothing before the returned parameter is on the surface.
+    #[inline]
+    pub fn first_candidate(&self, ray: &Ray, t0: f32, t1: f32) -> Option<f32> {
+        self.first_candidate_lattice(&self.lattice_ray(ray), t0, t1)
+            .map(|c| c.t)
+    }
+
+    /// [`EmptySpace::first_candidate`] for a ray already in lattice coordinates
+    /// ([`EmptySpace::lattice_ray`]), with what holds in the straddling cell found there.
+    #[inline]
+    pub fn first_candidate_lattice(&self, ray: &LatticeRay, t0: f32, t1: f32) -> Option<Candidate> {
+        // Outside the lattice box everything is empty.
+        let mut t = t0.max(ray.enter);
+        let t_end = t1.min(ray.exit);
+        // A ray crosses at most `Σ cells` cells; the bound only guards against rounding loops.
+        let steps = self.cells.iter().sum::<usize>() * 3 + 8;
+        for _ in 0..steps {
+            // Also stops on a NaN parameter.
+            if !matches!(
+                t.partial_cmp(&t_end),
+                Some(Ordering::Less | Ordering::Equal)
+            ) {
+                return None;
+            }
+            let u = ray.o + t * ray.d;
+            let cell = std::array::from_fn::<usize, 3, _>(|a| {
+                // `as usize` saturates: a point a rounding below 0 is in the first cell.
+                (u[a] as usize).min(self.cells[a] - 1)
+            });
+            let index = cell[0] + self.cells[0] * (cell[1] + self.cells[1] * cell[2]);
+            let k = self.distance[index];
+            // The cube of cells within `k − 1` of this one is empty (for `k = 0`, the cell itself is
+            // straddling): the ray leaves it through its far faces.
+            let c = glam::Vec3::from(cell.map(|c| c as f32));
+            let reach = k.max(1) as f32;
+            let positive = ray.d.cmpgt(glam::Vec3::ZERO);
+            let far = glam::Vec3::select(positive, c + reach, c - (reach - 1.0));
+            let across = (far - ray.o) * ray.inv;
+            // An axis the ray is parallel to does not bound it (its `inv` is infinite).
+            let parallel = ray.d.cmpeq(glam::Vec3::ZERO);
+            let leave = glam::Vec3::select(parallel, glam::Vec3::INFINITY, across).min_element();
+            if k == 0 {
+                return Some(Candidate {
+                    t,
+                    until: leave,
+                    inv_lipschitz: self.inv_lipschitz[index],
+                });
+            }
+            // Rounding can put `leave` at or behind `t` on a cell's face: move on by a sliver.
+            t = if leave > t {
+                leave
+            } else {
+                t + 1e-6 * (1.0 + t.abs())
+            };
+        }
+        // Out of iterations (rounding): no skipping here, and no local bound (the caller's applies).
+        Some(Candidate {
+            t: t.min(t1),
+            until: t.min(t1),
+            inv_lipschitz: [0.0; 2],
+        })
+    }
+}
+
+/// A ray in a grid's lattice coordinates ([`EmptySpace::lattice_ray`]), with what each skip needs.
+#[derive(Copy, Clone, Debug)]
+pub struct LatticeRay {
+    o: glam::Vec3,
+    d: glam::Vec3,
+    /// `1 / d` per axis (infinite where `d` is zero).
+    inv: glam::Vec3,
+    /// Where the line enters and leaves the lattice box (`enter > exit` when it misses).
+    enter: f32,
+    exit: f32,
+}
+
+/// Where the line `o + t d` is inside the box `[lo, hi]`: `(enter, exit)`, or `None` if it misses. Axes
+/// the line is parallel to bound it only if it lies outside their slab.
+fn slab(o: glam::Vec3, d: glam::Vec3, lo: glam::Vec3, hi: glam::Vec3) -> Option<(f32, f32)> {
+    let (mut enter, mut exit) = (f32::NEG_INFINITY, f32::INFINITY);
+    for a in 0..3 {
+        if d[a] == 0.0 {
+            if o[a] < lo[a] || o[a] > hi[a] {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / d[a];
+        let (ta, tb) = ((lo[a] - o[a]) * inv, (hi[a] - o[a]) * inv);
+        enter = enter.max(ta.min(tb));
+        exit = exit.min(ta.max(tb));
+    }
+    (enter <= exit).then_some((enter, exit))
+}
+
+/// Per cell, `1 / max` of the patch bounds over the cell and its 26 neighbours, for each side, counting
+/// only patches that reach that side (see [`grid::PatchLipschitz`]); 0 where none does (no point of
+/// the cell is on that side; the caller's global bound then applies).
+fn neighbourhood_inverse_bounds(
+    patches: &[grid::PatchLipschitz],
+    cells: [usize; 3],
+) -> Vec<[f32; 2]> {
+    let [nx, ny, nz] = cells;
+    let mut out = Vec::with_capacity(patches.len());
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let mut bound = [0.0f32; 2];
+                for qz in z.saturating_sub(1)..(z + 2).min(nz) {
+                    for qy in y.saturating_sub(1)..(y + 2).min(ny) {
+                        for qx in x.saturating_sub(1)..(x + 2).min(nx) {
+                            let p = patches[qx + nx * (qy + ny * qz)];
+                            if p.outside {
+                                bound[0] = bound[0].max(p.bound);
+                            }
+                            if p.inside {
+                                bound[1] = bound[1].max(p.bound);
+                            }
+                        }
+                    }
+                }
+                out.push(bound.map(|b| if b > 0.0 { 1.0 / b } else { 0.0 }));
+            }
+        }
+    }
+    out
+}
+
+/// The chessboard (L∞) distance, in cells, from each cell to the nearest `seed` cell, saturated at 255
+/// (255 everywhere when there is none): the two-pass chamfer transform with the full 3×3×3 mask of unit
+/// weights, which is exact for this metric.
+fn chessboard_distance(seed: &[bool], cells: [usize; 3]) -> Vec<u8> {
+    let [nx, ny, nz] = cells;
+    let mut d: Vec<u8> = seed.iter().map(|&s| if s { 0 } else { 255 }).collect();
+    let index = |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
+    let mut pass = |order: &mut dyn Iterator<Item = usize>, forward: bool| {
+        for k in order {
+            let (x, y, z) = (k % nx, (k / nx) % ny, k / (nx * ny));
+            let mut best = d[k];
+            for dz in -1isize..=1 {
+                for dy in -1isize..=1 {
+                    for dx in -1isize..=1 {
+                        // Half of the mask per pass: the neighbours already visited in scan order.
+                        let before = (dz, dy, dx) < (0, 0, 0);
+                        if before != forward || (dz, dy, dx) == (0, 0, 0) {
+                            continue;
+                        }
+                        let (qx, qy, qz) = (x as isize + dx, y as isize + dy, z as isize + dz);
+                        if qx < 0
+                            || qy < 0
+                            || qz < 0
+                            || qx >= nx as isize
+                            || qy >= ny as isize
+                            || qz >= nz as isize
+                        {
+                            continue;
+                        }
+                        let n = d[index(qx as usize, qy as usize, qz as usize)];
+                        best = best.min(n.saturating_add(1));
+                    }
+                }
+            }
+            d[k] = best;
+        }
+    };
+    let n = seed.len();
+    pass(&mut (0..n), true);
+    pass(&mut (0..n).rev(), false);
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chessboard_distance_matches_brute_force() {
+        let cells = [7, 5, 6];
+        let n = cells.iter().product();
+        let seed: Vec<bool> = (0..n).map(|k| (k * 37 + 11) % 53 == 0).collect();
+        let got = chessboard_distance(&seed, cells);
+        let coords = |k: usize| {
+            [
+                k % cells[0],
+                (k / cells[0]) % cells[1],
+                k / (cells[0] * cells[1]),
+            ]
+        };
+        for (k, &got) in got.iter().enumerate() {
+            let want = (0..n)
+                .filter(|&j| seed[j])
+                .map(|j| {
+                    let (a, b) = (coords(k), coords(j));
+                    (0..3).map(|i| a[i].abs_diff(b[i])).max().unwrap()
+                })
+                .min()
+                .map_or(255, |v| v.min(255) as u8);
+            assert_eq!(got, want, "cell {:?}", coords(k));
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! Empty-space skipping of grid shapes: the cells it skips hold no surface, the neighbourhood Lipschitz
+//! bounds it steps with hold, and tracing finds the same hits with and without it.
+//!
+//! The shape is a baked union of two spheres (the kink of its outside distance between the lobes is where
+//! a grid's bound is steepest), rotated, scaled and moved away from the origin.
+
+use glam::Vec3;
+use implicit_psdr::Param3;
+use implicit_psdr::bsdf::Bsdf;
+use implicit_psdr::math::Ray;
+use implicit_psdr::sampler::Sampler;
+use implicit_psdr::scene::Shape;
+use implicit_psdr::sdf::{EmptySpace, Sdf, bake};
+use implicit_psdr::trace::{ShapeTrace, TraceSettings};
+
+fn blob() -> Shape {
+    let lobes = Sdf::Union(vec![
+        Sdf::sphere([-0.5, 0.0, 0.0], 0.7),
+        Sdf::sphere([0.55, 0.2, 0.1], 0.55),
+    ]);
+    let (lo, hi) = (Vec3::new(-1.6, -1.1, -1.1), Vec3::new(1.5, 1.1, 1.1));
+    let grid = Sdf::grid(bake(&lobes, lo, hi, 28), lo, hi).expect("valid grid");
+    let sdf = Sdf::transform(
+        grid,
+        [40.0, -25.0, 10.0],
+        Vec3::new(1.0, 2.0, 3.0),
+        37.0,
+        1.7,
+    );
+    Shape::new(
+        "blob",
+        sdf,
+        Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        },
+    )
+}
+
+fn unit_vector(s: &mut Sampler) -> Vec3 {
+    let u = s.next_2d();
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let p = 2.0 * std::f32::consts::PI * u.y;
+    Vec3::new(r * p.cos(), r * p.sin(), z)
+}
+
+/// A point of the shape's bounds, uniformly.
+fn point_in_bounds(shape: &Shape, s: &mut Sampler) -> Vec3 {
+    let b = shape.bounds;
+    b.min + (b.max - b.min) * Vec3::new(s.next_1d(), s.next_1d(), s.next_1d())
+}
+
+#[test]
+fn skipped_cells_hold_no_surface() {
+    let shape = blob();
+    let space = shape
+        .empty_space
+        .as_deref()
+        .expect("a grid under transforms");
+    let mut s = Sampler::new(11, 0, 0, 0);
+    let (mut skipped, mut missed) = (0, 0);
+    for _ in 0..3000 {
+        // Rays from outside the bounds and from inside them (some inside the shape), towards the bounds.
+        let centre = (shape.bounds.min + shape.bounds.max) * 0.5;
+        let o = if s.next_1d() < 0.5 {
+            centre + unit_vector(&mut s) * 6.0
+        } else {
+            point_in_bounds(&shape, &mut s)
+        };
+        let d = (point_in_bounds(&shape, &mut s) - o).normalize();
+        let ray = Ray::new(o, d);
+        let t_max = 12.0;
+        let end = match space.first_candidate(&ray, 0.0, t_max) {
+            Some(t) => t,
+            None => {
+                missed += 1;
+                t_max
+            }
+        };
+        if end > 0.0 {
+            skipped += 1;
+        }
+        let first = shape.sdf.eval_f32(ray.o);
+        for k in 0..=400 {
+            let t = end * k as f32 / 400.0;
+            let phi = shape.sdf.eval_f32(ray.at(t));
+            assert!(
+                phi * first > 0.0,
+                "ray {ray:?}: φ changes sign at t = {t} before the candidate {end} (φ(0) = {first})"
+            );
+        }
+    }
+    // The test means something only if rays do skip, and some skip the whole shape.
+    assert!(
+        skipped > 1000 && missed > 100,
+        "skipped {skipped}, missed {missed}"
+    );
+}
+
+#[test]
+fn neighbourhood_bounds_hold_within_a_cell() {
+    let shape = blob();
+    let space = shape.empty_space.as_deref().unwrap();
+    let mut s = Sampler::new(12, 0, 0, 0);
+    let (mut checked, mut tightest) = (0, 0.0f32);
+    for _ in 0..20000 {
+        let p = point_in_bounds(&shape, &mut s);
+        // A ray starting at `p` finds its own cell when that cell straddles the surface.
+        let ray = Ray::new(p, unit_vector(&mut s));
+        let Some(cell) = space.first_candidate_lattice(&space.lattice_ray(&ray), 0.0, 1.0) else {
+            continue;
+        };
+        if cell.t != 0.0 {
+            continue;
+        }
+        let q = p + unit_vector(&mut s) * space.cell_size * s.next_1d();
+        let (fp, fq) = (shape.sdf.eval_f32(p), shape.sdf.eval_f32(q));
+        // The side's bound holds on segments that stay on that side.
+        let side = if fp > 0.0 && fq > 0.0 {
+            0
+        } else if fp < 0.0 && fq < 0.0 {
+            1
+        } else {
+            continue;
+        };
+        let same_side = (1..16).all(|k| {
+            let v = shape.sdf.eval_f32(p.lerp(q, k as f32 / 16.0));
+            (v > 0.0) == (side == 0)
+        });
+        if !same_side || cell.inv_lipschitz[side] == 0.0 {
+            continue;
+        }
+        let bound = 1.0 / cell.inv_lipschitz[side];
+        let slope = (fp - fq).abs() / (p - q).length();
+        // Rounding of two values near 1 in f32 over a short segment.
+        let noise = 4.0 * f32::EPSILON * (fp.abs() + fq.abs() + 1.0) / (p - q).length();
+        assert!(
+            slope <= bound + noise,
+            "slope {slope} above the neighbourhood bound {bound} between {p} and {q}"
+        );
+        tightest = tightest.max(slope / bound);
+        checked += 1;
+    }
+    // Enough pairs, and bounds that are not loose everywhere (the check would pass for any huge bound).
+    assert!(checked > 2000, "checked {checked}");
+    assert!(tightest > 0.8, "largest slope / bound {tightest}");
+}
+
+#[test]
+fn tracing_finds_the_same_hits_with_and_without_skipping() {
+    let shape = blob();
+    let mut plain = shape.clone();
+    plain.empty_space = None;
+    let settings = TraceSettings {
+        eps: 1e-4 * shape.bounds.extent().min_element(),
+        ..TraceSettings::default()
+    };
+    let mut s = Sampler::new(13, 0, 0, 0);
+    let centre = (shape.bounds.min + shape.bounds.max) * 0.5;
+    let (mut hits, mut grazes, mut leaving) = (0, 0, 0);
+    for i in 0..8000 {
+        // Rays from afar, then rays leaving the surface where one of them hit (shadow and bounce rays).
+        let mut ray = Ray::new(centre + unit_vector(&mut s) * 6.0, Vec3::ZERO);
+        ray.d = (point_in_bounds(&shape, &mut s) - ray.o).normalize();
+        if i % 2 == 1
+            && let ShapeTrace::Hit(t) = plain.trace(&ray, 0.0, 12.0, &settings)
+        {
+            let p = ray.at(t);
+            let n = shape.normal(p);
+            let w = unit_vector(&mut s);
+            let w = if w.dot(n) < 0.0 { -w } else { w };
+            ray = Ray::new(p + n * 4.0 * settings.eps_at_point(p), w);
+            leaving += 1;
+        }
+        let a = shape.trace(&ray, 0.0, 12.0, &settings);
+        let b = plain.trace(&ray, 0.0, 12.0, &settings);
+        match (a, b) {
+            (ShapeTrace::Hit(ta), ShapeTrace::Hit(tb)) => {
+                let cos = shape.normal(ray.at(tb)).dot(ray.d).abs();
+                let tolerance = settings.eps_at_point(ray.at(tb)) / cos.max(1e-3);
+                assert!(
+                    (ta - tb).abs() <= tolerance,
+                    "ray {ray:?}: hit at {ta} with skipping, {tb} without (|cos| {cos})"
+                );
+                hits += 1;
+            }
+            (ShapeTrace::Miss, ShapeTrace::Miss) => {}
+            (ShapeTrace::Hit(t), ShapeTrace::Miss) | (ShapeTrace::Miss, ShapeTrace::Hit(t)) => {
+                // Only a graze may be found by one and stepped over by the other.
+                let cos = shape.normal(ray.at(t)).dot(ray.d).abs();
+                assert!(
+                    cos < 0.05,
+                    "ray {ray:?}: one hit at {t} (|cos| {cos}), one miss"
+                );
+                grazes += 1;
+            }
+            other => panic!("ray {ray:?}: {other:?}"),
+        }
+    }
+    assert!(
+        hits > 800 && leaving > 800,
+        "hits {hits}, leaving rays {leaving}"
+    );
+    eprintln!("hits {hits}, leaving {leaving}, grazes {grazes}");
+    assert!(grazes <= 4, "{grazes} grazes found by one tracer only");
+}
+
+#[test]
+fn only_grids_whose_surface_stays_in_their_box_skip() {
+    assert!(blob().empty_space.is_some());
+    assert!(EmptySpace::of(&Sdf::sphere([0.0; 3], 1.0)).is_none());
+    // A grid baked too tight for its surface (its faces dip below the level): no skipping.
+    let (lo, hi) = (Vec3::splat(-0.5), Vec3::splat(0.5));
+    let grid = Sdf::grid(bake(&Sdf::sphere([0.0; 3], 1.0), lo, hi, 8), lo, hi).unwrap();
+    assert!(EmptySpace::of(&grid).is_none());
+}
