@@ -129,40 +129,26 @@ impl Aabb {
         t_max: f32,
         margin: impl FnOnce(f32) -> f32,
     ) -> Option<(f32, f32)> {
+        // Branch-free (this runs for every shape on every ray): lanes of axes the ray is parallel to
+        // are masked out of the slab tests (they do not bound it; their arithmetic is NaN or infinite,
+        // e.g. a ray in a face's plane) and tested against the grown slab directly.
         let inv = ray.d.recip();
+        let parallel = ray.d.cmpeq(Vec3::ZERO);
         let ta = (self.min - ray.o) * inv;
         let tb = (self.max - ray.o) * inv;
-        let (lo, hi) = (ta.min(tb), ta.max(tb));
-        // Axes the ray is parallel to do not bound it; comparisons skip NaN (a ray in a face's plane).
-        let (mut entry, mut exit) = (t_min, f32::INFINITY);
-        for k in 0..3 {
-            if ray.d[k] != 0.0 {
-                if lo[k] > entry {
-                    entry = lo[k];
-                }
-                if hi[k] < exit {
-                    exit = hi[k];
-                }
-            }
-        }
+        let lo = Vec3::select(parallel, Vec3::NEG_INFINITY, ta.min(tb));
+        let hi = Vec3::select(parallel, Vec3::INFINITY, ta.max(tb));
+        let entry = t_min.max(lo.max_element());
+        let exit = hi.min_element();
         // A ray that misses the box passes closest to it between leaving one slab and entering the next.
         let r = margin(entry.min(exit.max(t_min)));
-        let (mut t0, mut t1) = (t_min, t_max);
-        for k in 0..3 {
-            if ray.d[k] == 0.0 {
-                if ray.o[k] < self.min[k] - r || ray.o[k] > self.max[k] + r {
-                    return None;
-                }
-                continue;
-            }
-            let grow = r * inv[k].abs();
-            if lo[k] - grow > t0 {
-                t0 = lo[k] - grow;
-            }
-            if hi[k] + grow < t1 {
-                t1 = hi[k] + grow;
-            }
+        let outside = ray.o.cmplt(self.min - r) | ray.o.cmpgt(self.max + r);
+        if (parallel & outside).any() {
+            return None;
         }
+        let grow = Vec3::select(parallel, Vec3::ZERO, r * inv.abs());
+        let t0 = t_min.max((lo - grow).max_element());
+        let t1 = t_max.min((hi + grow).min_element());
         (t0 <= t1).then_some((t0, t1))
     }
 }
