@@ -20,6 +20,13 @@ use std::cmp::Ordering;
 
 /// The chessboard distance map of a grid shape's straddling cells, and the map from the shape's frame to
 /// lattice coordinates (cell `(i, j, k)` spans `[i, i + 1] × [j, j + 1] × [k, k + 1]`).
+///
+/// A cell whose 4×4×4 control points all lie on one side of the level holds no surface (the spline on
+/// it is their convex combination); a ray skips runs of such cells, jumping out of the cube of empty
+/// cells around the one it is in (the cell's chessboard distance to the nearest straddling cell, `k`,
+/// makes the `2k − 1` cells on a side around it empty). In straddling cells it steps with the
+/// Lipschitz bound of the cell's neighbourhood, which holds within one cell of any of its points.
+/// Applies to a grid under similarity transforms whose surface stays inside the grid box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmptySpace {
     /// Rows of the linear part of the map from the shape's frame to lattice coordinates.
