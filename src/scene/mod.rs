@@ -108,7 +108,8 @@ impl Shape {
         Ray::new(ray.o - self.translate.value(), ray.d)
     }
 
-    /// First crossing of the surface along `ray` in `[t0, t1]` (see [`first_crossing_skipping`]: grid shapes skip their empty cells).
+    /// First crossing of the surface along `ray` in `[t0, t1]` (see [`first_crossing_skipping`]: grid
+    /// shapes skip their empty cells).
     #[inline]
     pub fn trace(&self, ray: &Ray, t0: f32, t1: f32, settings: &TraceSettings) -> ShapeTrace {
         first_crossing_skipping(
