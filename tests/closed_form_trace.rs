@@ -5,7 +5,7 @@
 use glam::Vec3;
 use implicit_psdr::math::Ray;
 use implicit_psdr::sampler::Sampler;
-use implicit_psdr::sdf::Sdf;
+use implicit_psdr::sdf::{AngleTrig, Sdf};
 use implicit_psdr::trace::{
     ShapeTrace, TraceSettings, all_crossings_checked, all_hits_checked, first_crossing,
     sphere_trace,
@@ -46,6 +46,7 @@ fn transformed(child: Sdf, translate: Vec3, axis: Vec3, angle: f32, scale: f32) 
         translate: Param3::new(translate.to_array()),
         axis: axis.normalize(),
         angle: Param::new(angle),
+        trig: AngleTrig::of(angle),
         scale: Param::new(scale),
         child: Box::new(child),
     }

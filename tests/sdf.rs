@@ -8,7 +8,7 @@ use common::Rng;
 use glam::Vec3;
 use implicit_psdr::Param;
 use implicit_psdr::scalar::Dual32;
-use implicit_psdr::sdf::{GridData, Sdf, bake, read_npy, write_npy};
+use implicit_psdr::sdf::{AngleTrig, GridData, Sdf, bake, read_npy, write_npy};
 use std::path::PathBuf;
 
 /// Region the suite samples: the node's box with a generous margin, or a fixed cube for unbounded nodes.
@@ -443,6 +443,7 @@ fn parameter_derivatives_with_dual_numbers() {
         translate: [0.1, 0.2, 0.0].into(),
         axis: Vec3::new(0.0, 0.6, 0.8),
         angle: Param { value: deg, slot },
+        trig: AngleTrig::of(deg),
         scale: Param::new(1.3),
         child: Box::new(Sdf::cuboid(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.3), 0.1)),
     };
@@ -830,4 +831,25 @@ fn grid_bounds_hug_the_surface() {
             "axis {a}: {b:?} is not within three cells of the sphere's box"
         );
     }
+}
+
+/// A transform keeps its angle's cosine and sine; an angle set in place afterwards (as parameters are)
+/// must not be evaluated with the old ones.
+#[test]
+fn transform_angle_set_in_place_is_not_served_stale() {
+    let child = Sdf::cuboid(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.3), 0.1);
+    let axis = Vec3::new(0.0, 0.6, 0.8);
+    let mut moved = Sdf::transform(child.clone(), [0.1, 0.2, 0.0], axis, 25.0, 1.3);
+    if let Sdf::Transform { angle, .. } = &mut moved {
+        angle.value = 40.0;
+    }
+    let fresh = Sdf::transform(child, [0.1, 0.2, 0.0], axis, 40.0, 1.3);
+    for p in [
+        Vec3::new(1.1, 0.7, -0.4),
+        Vec3::new(-0.3, 0.2, 0.9),
+        Vec3::new(0.5, -0.8, 0.1),
+    ] {
+        assert_eq!(moved.eval_f32(p), fresh.eval_f32(p), "at {p}");
+    }
+    assert_eq!(moved.refreshed(), fresh);
 }

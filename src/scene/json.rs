@@ -16,7 +16,7 @@ use crate::emitter::Emitter;
 use crate::error::{Error, FieldPath, Result};
 use crate::film::Filter;
 use crate::scalar::{GridValues, Param, Param3};
-use crate::sdf::{GridData, Sdf, read_npy};
+use crate::sdf::{AngleTrig, GridData, Sdf, read_npy};
 use glam::Vec3;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
@@ -611,6 +611,7 @@ impl Context<'_> {
             translate: translate.into(),
             axis,
             angle: Param::new(angle),
+            trig: AngleTrig::of(angle),
             scale: scale.into(),
             child: Box::new(child),
         })

@@ -54,6 +54,7 @@ impl Shape {
 
     /// A shape moved rigidly by `translate`.
     pub fn translated(name: impl Into<String>, sdf: Sdf, bsdf: Bsdf, translate: Param3) -> Self {
+        let sdf = sdf.refreshed();
         let t = translate.value();
         let local = sdf.bounds();
         let bounds = Aabb::new(local.min + t, local.max + t);

@@ -69,6 +69,7 @@ impl EmptySpace {
                 angle,
                 scale,
                 child,
+                ..
             } => {
                 let inner = Self::of(child)?;
                 // p_child = R⁻¹ (x − t) / s.

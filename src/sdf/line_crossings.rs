@@ -110,6 +110,7 @@ impl Sdf {
                 angle,
                 scale,
                 child,
+                ..
             } => {
                 let s = scale.value;
                 let (sin, cos) = angle.value.to_radians().sin_cos();

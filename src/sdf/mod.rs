@@ -44,6 +44,7 @@ pub use creases::surfaces_may_meet;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
+pub use transform::AngleTrig;
 
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
@@ -163,6 +164,8 @@ pub enum Sdf {
         angle: Param,
         /// Uniform scale (> 0).
         scale: Param,
+        /// `cos` and `sin` of `angle`, computed when the node was built ([`AngleTrig`]).
+        trig: AngleTrig,
         /// The transformed node.
         child: Box<Sdf>,
     },
@@ -230,7 +233,8 @@ impl Sdf {
                 angle,
                 scale,
                 child,
-            } => transform::eval(p, translate, *axis, angle, scale, child),
+                trig,
+            } => transform::eval(p, translate, *axis, angle, *trig, scale, child),
             Sdf::Grid {
                 data,
                 bbox_min,
@@ -361,6 +365,7 @@ impl Sdf {
                 angle,
                 scale,
                 child,
+                ..
             } => transform::bounds(translate, *axis, angle, scale, child),
             Sdf::Grid {
                 data,
@@ -581,14 +586,23 @@ impl Sdf {
         angle_deg: impl Into<Param>,
         scale: impl Into<Param>,
     ) -> Self {
+        let angle: Param = angle_deg.into();
         Sdf::Transform {
             translate: translate.into(),
             axis: axis.try_normalize().unwrap_or(glam::Vec3::Z),
-            angle: angle_deg.into(),
+            trig: AngleTrig::of(angle.value),
+            angle,
             scale: scale.into(),
             child: Box::new(child),
         }
     }
+    /// This node with the values it keeps for speed ([`AngleTrig`]) recomputed from its parameters,
+    /// after they were set in place.
+    pub fn refreshed(mut self) -> Self {
+        transform::refresh_trig(&mut self);
+        self
+    }
+
     /// `child` under a name (see [`Sdf::Named`]); the name is not checked here (the scene parser checks
     /// names).
     pub fn named(name: impl Into<String>, child: Sdf) -> Self {

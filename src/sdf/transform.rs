@@ -25,6 +25,51 @@ pub(super) fn rotate<S: Scalar>(v: Vec3<S>, k: glam::Vec3, c: S, s: S) -> Vec3<S
     )
 }
 
+/// The cosine and sine of a transform's angle, computed once when the node is built: the tracer
+/// evaluates a node whose angle is not differentiated many times per ray. Keyed by the angle's value:
+/// an angle changed in place (a parameter set, a finite-difference step) no longer matches and is
+/// computed afresh, never served stale.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct AngleTrig {
+    /// The angle (degrees) the values belong to.
+    pub degrees: f32,
+    /// Its cosine.
+    pub cos: f32,
+    /// Its sine.
+    pub sin: f32,
+}
+
+impl AngleTrig {
+    /// The cosine and sine of `degrees`, rounded exactly as [`eval`] computes them.
+    pub fn of(degrees: f32) -> Self {
+        let theta = degrees * (std::f32::consts::PI / 180.0);
+        Self {
+            degrees,
+            cos: theta.cos(),
+            sin: theta.sin(),
+        }
+    }
+}
+
+/// Recomputes the [`AngleTrig`] of every transform under `sdf` from its angle's current value (after
+/// parameters were set in place).
+pub(super) fn refresh_trig(sdf: &mut Sdf) {
+    match sdf {
+        Sdf::Transform {
+            angle, trig, child, ..
+        } => {
+            *trig = AngleTrig::of(angle.value);
+            refresh_trig(child);
+        }
+        Sdf::Union(children)
+        | Sdf::Intersection(children)
+        | Sdf::Difference(children)
+        | Sdf::SmoothUnion { children, .. } => children.iter_mut().for_each(refresh_trig),
+        Sdf::Named { child, .. } => refresh_trig(child),
+        _ => {}
+    }
+}
+
 /// `φ(x) = s φ_child(R⁻¹(x − t)/s)`.
 #[inline(always)]
 pub(super) fn eval<S: Scalar>(
@@ -32,13 +77,18 @@ pub(super) fn eval<S: Scalar>(
     translate: &Param3,
     axis: glam::Vec3,
     angle: &Param,
+    trig: AngleTrig,
     scale: &Param,
     child: &Sdf,
 ) -> S {
     let mut q = p - translate.get::<S>();
     // A zero, undifferentiated angle is the identity: skip the sine and cosine (the common case of a
     // translated or scaled node) without losing any derivative.
-    if angle.value != 0.0 || angle.slot.is_some() {
+    if angle.slot.is_none() && trig.degrees == angle.value {
+        if angle.value != 0.0 {
+            q = rotate(q, axis, S::constant(trig.cos), S::constant(-trig.sin));
+        }
+    } else if angle.value != 0.0 || angle.slot.is_some() {
         let theta = angle.get::<S>() * (std::f32::consts::PI / 180.0);
         let (c, s) = (theta.cos(), theta.sin());
         q = rotate(q, axis, c, -s);
