@@ -14,13 +14,13 @@
 //! The machine is shared: medians and ratios, never one absolute time. `cargo bench --bench complete
 //! [-- REPS]`.
 
-use implicit_psdr::compare::{box_blur, relative_l2};
 use implicit_psdr::film::Image;
 use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::integrator::{
     BoundaryBudget, DiffOptions, render_derivatives_with_boundary, render_interior,
 };
 use implicit_psdr::integrator::{RenderOptions, render};
+use implicit_psdr::report::blurred_error;
 use implicit_psdr::scene::{Scene, load};
 use std::hint::black_box;
 use std::path::Path;
@@ -52,25 +52,6 @@ fn options(spp: u32, seed: u64) -> DiffOptions {
         },
         ..DiffOptions::default()
     }
-}
-
-/// Relative L2 after a 5×5 box blur, over the three channel planes.
-fn blurred_error(a: &Image, reference: &Image) -> f64 {
-    let (w, h) = (a.width as usize, a.height as usize);
-    let (mut num, mut den) = (0.0, 0.0);
-    for c in 0..3 {
-        let plane =
-            |img: &Image| -> Vec<f32> { img.rgb.iter().skip(c).step_by(3).copied().collect() };
-        let (x, y) = (
-            box_blur(&plane(a), w, h, 2),
-            box_blur(&plane(reference), w, h, 2),
-        );
-        let e = relative_l2(&x, &y);
-        let n: f64 = y.iter().map(|v| (*v as f64).powi(2)).sum();
-        num += e * e * n;
-        den += n;
-    }
-    (num / den).sqrt()
 }
 
 /// The complete derivative with `spp` camera samples and `boost` times `diff`'s default boundary budgets.

@@ -19,6 +19,7 @@ pub mod film;
 pub mod integrator;
 pub mod math;
 pub mod optimize;
+pub mod report;
 pub mod sampler;
 pub mod scalar;
 pub mod scene;

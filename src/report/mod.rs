@@ -1,0 +1,6 @@
+//! Speed against error of derivative estimators (and of the primal image): the error measures shared
+//! by the `report` protocol and `benches/complete.rs`.
+
+pub mod measure;
+
+pub use measure::{bias_floor, blurred_error, raw_error, seed_noise};
