@@ -40,6 +40,22 @@ impl Estimator {
         }
     }
 
+    /// Whether it estimates a derivative (every estimator but [`Estimator::Primal`]).
+    pub fn is_derivative(self) -> bool {
+        self != Estimator::Primal
+    }
+
+    /// The boundary budgets as a fraction `(numerator, denominator)` of the default ones, for the
+    /// estimators that sample boundary terms; `None` for the others.
+    pub fn boundary_scale(self) -> Option<(u64, u64)> {
+        match self {
+            Estimator::Complete => Some((1, 1)),
+            Estimator::CompleteBoundaryX4 => Some((4, 1)),
+            Estimator::CompleteBoundaryDiv4 => Some((1, 4)),
+            Estimator::Interior | Estimator::Fd | Estimator::Primal => None,
+        }
+    }
+
     /// Parses a comma-separated list of names (duplicates kept once, in the order given); the error
     /// is one line naming the unknown entry and the known names.
     pub fn parse_list(text: &str) -> Result<Vec<Estimator>, String> {

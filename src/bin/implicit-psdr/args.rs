@@ -75,6 +75,11 @@ pub(crate) enum Command {
     /// progress.csv, loss.png, views.png (per view: target | current), NODE.npy per optimised grid and
     /// result.json (the optimised scene).
     Optimize(OptimizeArgs),
+    /// Speed against error: runs each estimator at spp 1, 2, 4, ... (two seeds per point) until its
+    /// share of the budget is spent, measures each run against a reference, and writes into --out
+    /// report.csv (one row per run), report.md (time to 10%, 5%, 2% blurred error, bias floors,
+    /// fd / complete) and report.png + report.svg (log-log error against seconds per parameter).
+    Report(ReportArgs),
     /// Compare the derivative channels of two EXR files (B is the reference): relative L2 error, raw and
     /// after a 5x5 box blur, sums, sums of absolute values and correlation.
     Compare {
@@ -186,6 +191,31 @@ pub(crate) struct OptimizeArgs {
 }
 
 #[derive(Args, Debug)]
+pub(crate) struct ReportArgs {
+    /// The scene file (JSON, see README).
+    pub(crate) scene: PathBuf,
+    /// A parameter to report on (repeat for several; see `params`).
+    #[arg(long = "param", value_name = "P", required = true)]
+    pub(crate) params: Vec<String>,
+    /// Reference derivatives: an EXR of the scene's size with channels d.P.R, d.P.G, d.P.B for every
+    /// --param P (e.g. from `diff` at high spp) [default: fd at high spp with half the default step].
+    #[arg(long, value_name = "REF.exr")]
+    pub(crate) reference: Option<PathBuf>,
+    /// Seconds of estimator runs in all, shared evenly between the (parameter, estimator) series and
+    /// the image; the references come on top.
+    #[arg(long, value_name = "SECONDS", default_value_t = implicit_psdr::report::DEFAULT_BUDGET,
+          allow_negative_numbers = true, value_parser = positive_f64)]
+    pub(crate) budget: f64,
+    /// Comma-separated estimators: complete, interior, complete-boundary-x4, complete-boundary-div4,
+    /// fd, primal [default: all that apply].
+    #[arg(long, value_name = "LIST")]
+    pub(crate) estimators: Option<String>,
+    /// Output folder, created if missing; its report.* files are replaced only when all are written.
+    #[arg(long, value_name = "DIR", default_value = "report")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
 pub(crate) struct FdArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
@@ -215,6 +245,14 @@ pub(crate) fn grid_direction(text: &str) -> Result<(String, PathBuf), String> {
             Ok((node.trim().to_string(), PathBuf::from(file)))
         }
         _ => Err("expected NODE=U.npy".into()),
+    }
+}
+
+/// A finite number > 0, in double precision.
+pub(crate) fn positive_f64(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("expected a finite number > 0, got {text:?}")),
     }
 }
 

@@ -8,6 +8,7 @@
 mod args;
 mod grad;
 mod optimize;
+mod report;
 
 use anyhow::{Context, Result};
 use args::{BakeArgs, Cli, Command, DiffArgs, EstimatorArgs, FdArgs, OutputArgs, SceneArgs};
@@ -74,6 +75,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Grad(args) => grad::grad(&args),
         Command::Fd(args) => finite_difference(&args),
         Command::Optimize(args) => optimize::optimize(&args),
+        Command::Report(args) => report::report(&args),
         Command::Compare { a, b, channel } => {
             let rows = compare::compare_files(&a, &b, channel.as_deref())?;
             print!("{}", compare::format_table(&a, &b, &rows));
@@ -90,7 +92,7 @@ fn in_file(path: &Path) -> impl Fn(implicit_psdr::Error) -> anyhow::Error + '_ {
     }
 }
 
-fn load_scene(path: &Path) -> Result<scene::Scene> {
+pub(crate) fn load_scene(path: &Path) -> Result<scene::Scene> {
     scene::load(path).map_err(in_file(path))
 }
 

@@ -1,0 +1,145 @@
+//! The `report` command: speed against error of the estimators for the scene's parameters, as a CSV,
+//! a Markdown table and a plot (PNG and SVG) in one folder. The protocol is the library's
+//! (`implicit_psdr::report`); this prints, shows progress and writes.
+//!
+//! Everything is checked (scene, parameters, estimators, budget, reference) before anything long is
+//! rendered and before the folder is touched; the four files are written to temporary names and
+//! renamed only when all are written.
+
+use crate::args::ReportArgs;
+use crate::grad::{Writer, write_all_or_nothing};
+use crate::load_scene;
+use anyhow::{Context, Result, bail};
+use implicit_psdr::integrator::fd;
+use implicit_psdr::report::{self, Estimator, Status, plot, summary};
+use std::io::IsTerminal;
+
+pub(crate) fn report(args: &ReportArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let estimators = match &args.estimators {
+        Some(list) => Estimator::parse_list(list).map_err(anyhow::Error::msg)?,
+        None => Estimator::ALL.to_vec(),
+    };
+    for p in &args.params {
+        fd::parameter_value(&scene, p).with_context(|| format!("--param {p}"))?;
+    }
+    let out = &args.out;
+    if out.exists() && !out.is_dir() {
+        bail!("--out {}: is not a folder", out.display());
+    }
+    let given = match &args.reference {
+        Some(path) => {
+            let size = (scene.camera.width, scene.camera.height);
+            Some(report::read_reference(path, &args.params, size).context("--reference")?)
+        }
+        None => None,
+    };
+    let plan = report::plan(
+        &scene,
+        &args.params,
+        &estimators,
+        args.budget,
+        given.is_none(),
+    )?;
+    for s in &plan.skipped {
+        let name = summary::section_name(s.parameter.as_deref());
+        println!("skipped {} for {name}: {}", s.estimator.name(), s.reason);
+    }
+    println!(
+        "{} series of {:.2} s each ({:.1} s in all); references at {} spp",
+        plan.series.len(),
+        plan.share,
+        plan.budget,
+        plan.reference_spp
+    );
+    let bar = Bar::new(plan.budget);
+    let result = report::run(&plan, given, &mut |status| bar.show(status));
+    bar.finish();
+    let result = result?;
+
+    for section in &result.sections {
+        let name = summary::section_name(section.parameter.as_deref());
+        println!("{name}: reference {}", summary::describe_reference(section));
+        for e in summary::estimators(section) {
+            let points = summary::points(section, e);
+            let to5 = match summary::time_to(&points, 0.05) {
+                Some((s, spp)) => format!("{} ({spp} spp)", summary::seconds(s)),
+                None => "not reached".into(),
+            };
+            let last = points.last().expect("a series has a point");
+            println!(
+                "  {:24} to 5%: {to5:20} bias floor {:.4} at {} spp",
+                e.name(),
+                last.bias_floor,
+                last.spp
+            );
+        }
+    }
+
+    let (csv, md) = (summary::csv(&result), summary::markdown(&result));
+    let png = plot::png(&result)?;
+    let svg = plot::svg(&result)?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("--out {}: cannot create", out.display()))?;
+    let text = |t: String| -> Writer {
+        Box::new(move |tmp| std::fs::write(tmp, t).map_err(|e| e.to_string()))
+    };
+    let bytes = |b: Vec<u8>| -> Writer {
+        Box::new(move |tmp| std::fs::write(tmp, b).map_err(|e| e.to_string()))
+    };
+    write_all_or_nothing(vec![
+        (out.join("report.csv"), text(csv)),
+        (out.join("report.md"), text(md)),
+        (out.join("report.png"), bytes(png)),
+        (out.join("report.svg"), text(svg)),
+    ])?;
+    println!(
+        "wrote report.csv, report.md, report.png and report.svg in {}",
+        out.display()
+    );
+    Ok(())
+}
+
+/// A progress bar over the budget's seconds, with the series and spp running, on stderr when it is a
+/// terminal.
+struct Bar(Option<indicatif::ProgressBar>);
+
+impl Bar {
+    fn new(budget: f64) -> Self {
+        if !std::io::stderr().is_terminal() {
+            return Self(None);
+        }
+        let bar = indicatif::ProgressBar::new((budget * 1e3) as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {msg} {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Self(Some(bar))
+    }
+
+    fn show(&self, status: Status<'_>) {
+        let Some(bar) = &self.0 else { return };
+        match status {
+            Status::Reference { parameter, spp } => {
+                let name = summary::section_name(parameter);
+                bar.set_message(format!("reference of {name} at {spp} spp"));
+            }
+            Status::Run {
+                parameter,
+                estimator,
+                spp,
+                spent,
+            } => {
+                let name = summary::section_name(parameter);
+                bar.set_position((spent * 1e3) as u64);
+                bar.set_message(format!("{name}: {} at {spp} spp", estimator.name()));
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.0 {
+            bar.finish_and_clear();
+        }
+    }
+}
