@@ -4,34 +4,24 @@
 //! 1. **Cost**: complete-derivative time / primal time at the same spp (the scene's 64) with `diff`'s
 //!    default boundary budgets (`BoundaryBudget`: 2 silhouette and 8 shadow samples per pixel at
 //!    64 spp), one parameter; also with 4× those budgets. Goal ≤ 3.
-//! 2. **Time to 5% error**, this estimator against central finite differences (common random numbers,
-//!    `h = 0.01`), for `ball.radius`, `ball.center.x` and `light.center.x`: each method's budget is doubled
-//!    until the relative L2 error after a 5×5 box blur (all three channels) against a reference falls below
-//!    5%. The reference is `fd` at `REF_SPP` with other seeds; its own error (half the distance between
-//!    two such references, in quadrature) is printed too. The reference shares `fd`'s step, so `fd`'s
-//!    `O(h²)` bias does not count against it: the comparison favours `fd`.
+//! 2. **Time to 5% error** of the complete derivative and of central finite differences for
+//!    `ball.radius`, `ball.center.x` and `light.center.x`: the protocol of the `report` command
+//!    (`implicit_psdr::report`, every estimator, its default budget and references), so that the
+//!    README's table and `implicit-psdr report` are one measurement. Prints the table's rows.
 //!
 //! The machine is shared: medians and ratios, never one absolute time. `cargo bench --bench complete
 //! [-- REPS]`.
 
 use implicit_psdr::film::Image;
-use implicit_psdr::integrator::fd::finite_difference;
 use implicit_psdr::integrator::{
     BoundaryBudget, DiffOptions, render_derivatives_with_boundary, render_interior,
 };
 use implicit_psdr::integrator::{RenderOptions, render};
-use implicit_psdr::report::blurred_error;
+use implicit_psdr::report::{self, DEFAULT_BUDGET, Estimator, summary};
 use implicit_psdr::scene::{Scene, load};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
-
-/// Samples per pixel of each finite-difference reference.
-const REF_SPP: u32 = 4096;
-/// The finite-difference step.
-const H: f32 = 0.01;
-/// The error to reach.
-const TARGET: f64 = 0.05;
 
 fn default_scene() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
@@ -62,28 +52,6 @@ fn complete(scene: &Scene, spp: u32, seed: u64, boost: u64) -> Image {
     let out = render_derivatives_with_boundary(scene, 1, &options(spp, seed), primary, secondary)
         .expect("the default scene supports every term");
     out.total().remove(0)
-}
-
-/// Doubles the budget from 1 spp until `run` is within [`TARGET`] of `reference` (or `max_spp` is passed);
-/// returns the seconds and the spp of the first run below the target, and the last error.
-fn time_to_target(
-    reference: &Image,
-    max_spp: u32,
-    mut run: impl FnMut(u32) -> Image,
-) -> (Option<(f64, u32)>, f64) {
-    let mut spp = 1;
-    let mut last = f64::INFINITY;
-    while spp <= max_spp {
-        let t = Instant::now();
-        let image = run(spp);
-        let seconds = t.elapsed().as_secs_f64();
-        last = blurred_error(&image, reference);
-        if last < TARGET {
-            return (Some((seconds, spp)), last);
-        }
-        spp *= 2;
-    }
-    (None, last)
 }
 
 fn main() {
@@ -134,37 +102,47 @@ fn main() {
         c4 / p
     );
 
+    time_to_five_percent();
+}
+
+/// Part 2: the `report` protocol on the default scene, and the README's rows from it.
+fn time_to_five_percent() {
+    let params: Vec<String> = ["ball.radius", "ball.center.x", "light.center.x"]
+        .map(String::from)
+        .to_vec();
+    let scene = default_scene();
+    let plan = report::plan(&scene, &params, &Estimator::ALL, DEFAULT_BUDGET, true)
+        .expect("the default scene supports every estimator");
+    for s in &plan.skipped {
+        println!("  skipped {}: {}", s.estimator.name(), s.reason);
+    }
+    let result = report::run(&plan, None, &mut |_| {}).expect("the report runs");
     println!(
-        "time to a {:.0}% relative L2 error after a 5x5 blur:",
-        TARGET * 100.0
+        "time to a 5% relative L2 error after a 5x5 blur (report protocol, {} s budget, references \
+         at {} spp):",
+        plan.budget, plan.reference_spp
     );
-    for name in ["ball.radius", "ball.center.x", "light.center.x"] {
-        let fd_options = |spp: u32, seed: u64| RenderOptions {
-            spp,
-            seed,
-            progress: Default::default(),
+    println!(
+        "| parameter | complete derivative | `fd` (common random numbers) | `fd` / complete |"
+    );
+    println!("|---|---|---|---|");
+    for section in result.sections.iter().filter(|s| s.parameter.is_some()) {
+        let time = |e| summary::time_to(&summary::points(section, e), 0.05);
+        let show = |t: Option<(f64, u32)>| match t {
+            Some((s, spp)) => format!("{} ({spp} spp)", summary::seconds(s)),
+            None => "not reached".into(),
         };
-        let reference = finite_difference(&plain, name, H, &fd_options(REF_SPP, 1000)).unwrap();
-        let second = finite_difference(&plain, name, H, &fd_options(REF_SPP, 2000)).unwrap();
-        let own = blurred_error(&second, &reference) / std::f64::consts::SQRT_2;
-        let mut scene = default_scene();
-        scene.select_parameters(&[name.to_string()]).unwrap();
-        let (ours, ours_err) = time_to_target(&reference, 1024, |spp| complete(&scene, spp, 7, 1));
-        let (fd, fd_err) = time_to_target(&reference, REF_SPP / 2, |spp| {
-            finite_difference(&plain, name, H, &fd_options(spp, 7)).unwrap()
-        });
-        let show = |r: Option<(f64, u32)>, err: f64| match r {
-            Some((s, spp)) => format!("{:7.2} s ({spp} spp)", s),
-            None => format!("not reached (error {err:.3} at the largest budget)"),
+        let (c, f) = (time(Estimator::Complete), time(Estimator::Fd));
+        let ratio = match (c, f) {
+            (Some((c, _)), Some((f, _))) => format!("{:.1}", f / c),
+            _ => "–".into(),
         };
         println!(
-            "  {name:15} reference's own error {own:.3}; complete: {}; fd: {}{}",
-            show(ours, ours_err),
-            show(fd, fd_err),
-            match (ours, fd) {
-                (Some((a, _)), Some((b, _))) => format!("; fd / complete {:.1}", b / a),
-                _ => String::new(),
-            }
+            "| `{}` | {} | {} | {ratio} |",
+            summary::section_name(section.parameter.as_deref()),
+            show(c),
+            show(f)
         );
+        println!("    reference: {}", summary::describe_reference(section));
     }
 }

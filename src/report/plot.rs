@@ -117,22 +117,37 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo / widen, hi * widen)
 }
 
-/// The label of a tick of a log axis: the values 1, 2 and 5 times a power of ten, in plain decimals
-/// (`0.05`, `20`); the others stay unlabelled, so that a decade holds at most three labels.
+/// The label of a tick of a log axis, at `v` = log10 of the value: the values 1, 2 and 5 times a power
+/// of ten, in plain decimals (`0.05`, `20`); other positions stay unlabelled. The axes step by a
+/// tenth of a decade, so 2 and 5 sit at `k + 0.3` and `k + 0.7`, 0.001 decade from `log10 2` and
+/// `log10 5` (well under a pixel).
 fn tick(v: f64) -> String {
-    if !(v.is_finite() && v > 0.0) {
+    if !v.is_finite() {
         return String::new();
     }
-    let exponent = v.log10().floor();
-    let mantissa = v / 10f64.powf(exponent);
-    if ![1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6) {
+    let k = (v + 0.02).floor();
+    let fraction = v - k;
+    let Some(m) = [
+        (1.0, 0.0),
+        (2.0, std::f64::consts::LOG10_2),
+        (5.0, 1.0 - std::f64::consts::LOG10_2),
+    ]
+    .iter()
+    .find(|(_, at)| (fraction - at).abs() < 0.02)
+    .map(|(m, _)| m) else {
         return String::new();
-    }
-    let decimals = (-exponent).max(0.0) as usize;
-    format!("{v:.decimals$}")
+    };
+    let decimals = (-k).max(0.0) as usize;
+    format!("{:.decimals$}", m * 10f64.powf(k))
 }
 
-/// One section's panel.
+/// Key points to ask plotters for on an axis spanning `span` decades, so that it steps by a tenth.
+fn tenths(span: f64) -> usize {
+    (10.0 * span).ceil() as usize + 2
+}
+
+/// One section's panel. Plotted in log10 of both values on linear axes, so that the ticks and the
+/// grid lines (at 1 to 9 times each power of ten) are the report's own rather than plotters' choice.
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     section: &Section,
@@ -141,17 +156,15 @@ fn panel<DB: DrawingBackend>(
         .map(|e| {
             let pts = points(section, e).into_iter();
             let line = pts.map(|p| (p.seconds, p.blurred_error));
-            (
-                e,
-                line.filter(|(x, y)| *x > 0.0 && *y > 0.0 && y.is_finite())
-                    .collect(),
-            )
+            let positive = line.filter(|(x, y)| *x > 0.0 && *y > 0.0 && y.is_finite());
+            (e, positive.map(|(x, y)| (x.log10(), y.log10())).collect())
         })
         .collect();
     let floor = section.reference.floor().filter(|f| *f > 0.0);
     let all = || series.iter().flat_map(|(_, l)| l.iter());
-    let (x0, x1) = log_range(all().map(|p| p.0));
-    let (y0, y1) = log_range(all().map(|p| p.1).chain(floor));
+    let (x0, x1) = log_range(all().map(|p| 10f64.powf(p.0)));
+    let (y0, y1) = log_range(all().map(|p| 10f64.powf(p.1)).chain(floor));
+    let (x0, x1, y0, y1) = (x0.log10(), x1.log10(), y0.log10(), y1.log10());
     let title = format!(
         "{}: blurred error against time",
         section_name(section.parameter.as_deref())
@@ -161,20 +174,37 @@ fn panel<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(70)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    let grid = |lo: f64, hi: f64| {
+        let decades = lo.floor() as i32..=hi.ceil() as i32;
+        decades
+            .flat_map(|k| (1..10).map(move |m| (m, k as f64 + (m as f64).log10())))
+            .filter(move |(_, v)| *v > lo && *v < hi)
+    };
+    let shade = |m: i32| {
+        let g = if m == 1 { 200 } else { 232 };
+        RGBColor(g, g, g)
+    };
+    for (m, x) in grid(x0, x1) {
+        chart.draw_series(LineSeries::new([(x, y0), (x, y1)], shade(m)))?;
+    }
+    for (m, y) in grid(y0, y1) {
+        chart.draw_series(LineSeries::new([(x0, y), (x1, y)], shade(m)))?;
+    }
     chart
         .configure_mesh()
+        .disable_mesh()
+        .x_labels(tenths(x1 - x0))
+        .y_labels(tenths(y1 - y0))
         .x_desc("seconds per run")
         .y_desc("relative L2 error, 5x5 blur")
         .axis_desc_style(("sans-serif", 16))
         .label_style(("sans-serif", 13))
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
-        .bold_line_style(RGBColor(225, 225, 225))
-        .light_line_style(TRANSPARENT)
         .draw()?;
     if let Some(f) = floor {
-        let grey = RGBColor(120, 120, 120);
+        let (grey, f) = (RGBColor(120, 120, 120), f.log10());
         chart
             .draw_series(DashedLineSeries::new(
                 [(x0, f), (x1, f)],
@@ -201,4 +231,28 @@ fn panel<DB: DrawingBackend>(
         .label_font(("sans-serif", 13))
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_label_one_two_five_per_decade() {
+        assert_eq!(tick(-1.0), "0.1");
+        assert_eq!(tick(-2.0 + 0.7), "0.05");
+        assert_eq!(tick(1.3), "20");
+        assert_eq!(tick(-0.0000001), "1");
+        assert_eq!(tick(-2.0 + 0.5), "");
+        assert_eq!(tick(f64::NAN), "");
+    }
+
+    #[test]
+    fn log_ranges_hold_their_values_and_a_decade() {
+        let (lo, hi) = log_range([0.02, 0.5, f64::INFINITY, 0.0].into_iter());
+        assert!(lo < 0.02 && hi > 0.5);
+        let (lo, hi) = log_range([0.3].into_iter());
+        assert!(hi / lo >= 10.0 - 1e-9 && lo < 0.3 && hi > 0.3);
+        assert_eq!(log_range(std::iter::empty()), (0.1, 1.0));
+    }
 }

@@ -16,7 +16,7 @@ pub const RUN_SEEDS: [u64; 2] = [1, 2];
 /// No series goes past this many samples per pixel, however fast it runs.
 pub const MAX_SPP: u32 = 1 << 16;
 /// A computed reference costs about this many times one series' share of the budget.
-const REFERENCE_COST: f64 = 4.0;
+const REFERENCE_COST: f64 = 8.0;
 /// Bounds of the references' samples per pixel.
 const REFERENCE_SPP: (u32, u32) = (256, 1 << 16);
 

@@ -238,3 +238,104 @@ pub fn markdown(report: &Report) -> String {
     }
     t
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::Image;
+    use crate::report::{Reference, Section};
+
+    fn run(estimator: Estimator, spp: u32, seed: u64, seconds: f64, blurred: f64) -> Run {
+        Run {
+            parameter: Some("p.x".into()),
+            estimator,
+            spp,
+            seed,
+            seconds,
+            raw_error: 2.0 * blurred,
+            blurred_error: blurred,
+            noise: 0.01,
+            bias_floor: 0.0,
+        }
+    }
+
+    fn section() -> Section {
+        let mut runs = Vec::new();
+        // Complete: 0.3, 0.12 / 0.06, 0.04; fd: 0.2, 0.08, 0.045 at twice the time.
+        for (k, (a, b)) in [(0.3, 0.3), (0.13, 0.11), (0.07, 0.05), (0.04, 0.04)]
+            .into_iter()
+            .enumerate()
+        {
+            let spp = 1 << k;
+            runs.push(run(Estimator::Complete, spp, 1, 0.1 * spp as f64, a));
+            runs.push(run(Estimator::Complete, spp, 2, 0.1 * spp as f64 + 0.02, b));
+        }
+        for (k, e) in [0.2, 0.08, 0.045].into_iter().enumerate() {
+            let spp = 1 << k;
+            runs.push(run(Estimator::Fd, spp, 1, 0.2 * spp as f64, e));
+            runs.push(run(Estimator::Fd, spp, 2, 0.2 * spp as f64, e));
+        }
+        Section {
+            parameter: Some("p.x".into()),
+            reference: Reference::given(Image::new(1, 1)),
+            runs,
+        }
+    }
+
+    #[test]
+    fn points_average_the_seeds_and_time_to_takes_the_first_point_below() {
+        let s = section();
+        let complete = points(&s, Estimator::Complete);
+        assert_eq!(complete.len(), 4);
+        assert_eq!(complete[1].spp, 2);
+        assert!((complete[1].seconds - 0.21).abs() < 1e-12);
+        assert!((complete[1].blurred_error - 0.12).abs() < 1e-12);
+        // √(0.04² − 0.01²)
+        assert!((complete[3].bias_floor - 0.0015f64.sqrt()).abs() < 1e-12);
+        let near = |t: Option<(f64, u32)>, (s, spp): (f64, u32)| {
+            let (a, b) = t.expect("reached");
+            assert!((a - s).abs() < 1e-9 && b == spp, "{a} s at {b} spp");
+        };
+        near(time_to(&complete, 0.10), (0.41, 4));
+        near(time_to(&complete, 0.05), (0.81, 8));
+        assert_eq!(time_to(&complete, 0.02), None);
+        let fd = points(&s, Estimator::Fd);
+        near(time_to(&fd, 0.05), (0.8, 4));
+        assert_eq!(estimators(&s), [Estimator::Complete, Estimator::Fd]);
+    }
+
+    #[test]
+    fn texts_hold_every_run_and_the_ratio() {
+        let s = section();
+        let report = Report {
+            sections: vec![s],
+            skipped: Vec::new(),
+            budget: 2.0,
+            share: 1.0,
+        };
+        let csv = csv(&report);
+        let mut lines = csv.lines();
+        assert_eq!(lines.next().unwrap(), CSV_COLUMNS.join(","));
+        assert_eq!(lines.clone().count(), 14);
+        // A given reference: the reference columns are empty.
+        assert!(lines.all(|l| l.split(',').count() == 11 && l.ends_with(",,")));
+        let md = markdown(&report);
+        assert!(
+            md.contains("| complete | 0.410 s (4 spp) | 0.810 s (8 spp) | not reached |"),
+            "{md}"
+        );
+        // fd / complete at 5%: 0.8 / 0.81.
+        assert!(md.contains("1.0 at 5%"), "{md}");
+    }
+
+    #[test]
+    fn percentages_and_durations_read_well() {
+        assert_eq!(percent(0.05), "5%");
+        assert_eq!(percent(0.123), "12%");
+        assert_eq!(percent(0.0123), "1.2%");
+        assert_eq!(percent(0.00123), "0.12%");
+        assert_eq!(seconds(2.346), "2.35 s");
+        assert_eq!(seconds(0.0456), "0.046 s");
+        assert_eq!(seconds(0.00123), "1.23 ms");
+    }
+}
