@@ -9,7 +9,7 @@
 //! split evenly between the series, so each gets `budget / series`. A series runs at spp 1, 2, 4, …
 //! with the two seeds [`RUN_SEEDS`] per point until its run time passes its share (the last point
 //! may take as long as all before it, so a report takes up to about twice its budget, plus the
-//! references). Each run is measured against the section's [`Reference`] ([`reference`] says how it
+//! references). Each run is measured against the section's [`Reference`] ([`mod@reference`] says how it
 //! is made and what its floor is) with the measures of [`measure`].
 //!
 //! ## `report.csv`
