@@ -313,3 +313,96 @@ pub fn run(
         share: plan.share,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::parse;
+    use std::path::Path;
+
+    /// A ball over a floor under a small light, 8×8 pixels.
+    fn tiny() -> Scene {
+        let json = r#"{
+          "camera": {"origin": [0, 3, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45.0,
+                     "width": 8, "height": 8, "filter": "tent"},
+          "integrator": {"type": "direct"}, "spp": 4,
+          "shapes": [
+            {"name": "ball", "sdf": {"type": "sphere", "center": [0, 0, 0], "radius": 1.0},
+             "bsdf": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}},
+            {"name": "floor", "sdf": {"type": "box", "center": [0, -2, 0],
+             "half_size": [50, 0.5, 50], "rounding": 0.25},
+             "bsdf": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}],
+          "emitters": [{"name": "light", "type": "rectangle", "center": [1.5, 4, 2],
+            "normal": [0, -1, 0], "u": [1, 0, 0], "size": [1, 1], "radiance": [40, 40, 40]}]
+        }"#;
+        parse(json, Path::new(".")).unwrap()
+    }
+
+    #[test]
+    fn the_budget_is_shared_between_the_series_that_apply() {
+        let scene = tiny();
+        let names = ["ball.radius".to_string(), "ball.albedo.r".to_string()];
+        let plan = plan(&scene, &names, &Estimator::ALL, 11.0, true).unwrap();
+        // An albedo moves no edge: its boundary-budget variants are skipped, with the reason.
+        let skipped: Vec<(&str, Estimator)> = (plan.skipped.iter())
+            .map(|s| (s.parameter.as_deref().unwrap(), s.estimator))
+            .collect();
+        assert_eq!(
+            skipped,
+            [
+                ("ball.albedo.r", Estimator::CompleteBoundaryX4),
+                ("ball.albedo.r", Estimator::CompleteBoundaryDiv4)
+            ]
+        );
+        assert!(plan.skipped[0].reason.contains("moves no edge"));
+        // 5 series for the radius, 3 for the albedo, 1 for the image.
+        assert_eq!(plan.series.len(), 9);
+        assert_eq!(plan.series.last(), Some(&(2, Estimator::Primal)));
+        assert!((plan.share - 11.0 / 9.0).abs() < 1e-12);
+        assert!(plan.reference_spp.is_power_of_two());
+        assert!((REFERENCE_SPP.0..=REFERENCE_SPP.1).contains(&plan.reference_spp));
+    }
+
+    #[test]
+    fn bad_plans_are_refused_with_what_is_wrong() {
+        let scene = tiny();
+        let radius = ["ball.radius".to_string()];
+        for budget in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let e = plan(&scene, &radius, &Estimator::ALL, budget, true).unwrap_err();
+            assert!(e.to_string().contains("--budget"), "{e}");
+        }
+        let twice = ["ball.radius".to_string(), "ball.radius".to_string()];
+        let e = plan(&scene, &twice, &Estimator::ALL, 1.0, true).unwrap_err();
+        assert!(e.to_string().contains("twice"), "{e}");
+        let unknown = ["ball.radus".to_string()];
+        let e = plan(&scene, &unknown, &Estimator::ALL, 1.0, true).unwrap_err();
+        assert!(e.to_string().contains("ball.radus"), "{e}");
+    }
+
+    #[test]
+    fn a_series_doubles_its_spp_with_two_seeds_until_its_share_is_spent() {
+        let scene = tiny();
+        let names = ["ball.albedo.r".to_string()];
+        let mut plan = plan(&scene, &names, &[Estimator::Fd], 0.05, true).unwrap();
+        plan.reference_spp = 256;
+        let mut statuses = 0;
+        let report = run(&plan, None, &mut |_| statuses += 1).unwrap();
+        let runs = &report.sections[0].runs;
+        assert!(runs.len() >= 2 && runs.len() % 2 == 0);
+        for (k, pair) in runs.chunks(2).enumerate() {
+            assert_eq!((pair[0].spp, pair[1].spp), (1 << k, 1 << k));
+            assert_eq!([pair[0].seed, pair[1].seed], RUN_SEEDS);
+            assert_eq!(pair[0].noise, pair[1].noise);
+        }
+        // Every point but the last started within the share.
+        let points: Vec<f64> = runs
+            .chunks(2)
+            .map(|p| p[0].seconds + p[1].seconds)
+            .collect();
+        let before_last: f64 = points[..points.len() - 1].iter().sum();
+        assert!(before_last < plan.share);
+        assert_eq!(statuses, 1 + points.len());
+        // The albedo is linear: fd's error is noise alone and falls with the samples.
+        assert!(runs.last().unwrap().raw_error < runs[0].raw_error);
+    }
+}
