@@ -388,7 +388,7 @@ mod tests {
         let mut statuses = 0;
         let report = run(&plan, None, &mut |_| statuses += 1).unwrap();
         let runs = &report.sections[0].runs;
-        assert!(runs.len() >= 2 && runs.len() % 2 == 0);
+        assert!(runs.len() >= 2 && runs.len().is_multiple_of(2));
         for (k, pair) in runs.chunks(2).enumerate() {
             assert_eq!((pair[0].spp, pair[1].spp), (1 << k, 1 << k));
             assert_eq!([pair[0].seed, pair[1].seed], RUN_SEEDS);
