@@ -21,7 +21,8 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
         None => Estimator::ALL.to_vec(),
     };
     for p in &args.params {
-        fd::parameter_value(&scene, p).with_context(|| format!("--param {p}"))?;
+        // The error names `--param` and the parameter itself, as `fd`'s does.
+        fd::parameter_value(&scene, p).with_context(|| args.scene.display().to_string())?;
     }
     let out = &args.out;
     if out.exists() && !out.is_dir() {
