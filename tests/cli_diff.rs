@@ -16,19 +16,7 @@ fn workdir(name: &str) -> PathBuf {
 /// The default scene (`scenes/sphere_floor.json`) at 16×16 pixels, 4 spp, with `edit` applied, written
 /// to `dir/scene.json`.
 fn write_scene(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
-    write_scene_as(dir, "scene.json", edit);
-}
-
-/// [`write_scene`] under the name `name`.
-fn write_scene_as(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
-    let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    v["camera"]["width"] = 16.into();
-    v["camera"]["height"] = 16.into();
-    v["spp"] = 4.into();
-    edit(&mut v);
-    std::fs::write(dir.join(name), v.to_string()).unwrap();
+    common::write_small_scene(dir, "scene.json", edit);
 }
 
 /// The sorted channel names of an EXR file, and its size.
@@ -501,7 +489,7 @@ fn bad_parameters_exit_2_without_output() {
 fn set_overrides_a_parameter_like_the_file() {
     let dir = workdir("set");
     write_scene(&dir, |_| {});
-    write_scene_as(&dir, "edited.json", |v| {
+    common::write_small_scene(&dir, "edited.json", |v| {
         v["shapes"][0]["sdf"]["radius"] = 0.7.into()
     });
     let set = run(

@@ -28,13 +28,7 @@ const COLUMNS: [&str; 11] = [
 /// A fresh folder holding the default scene at 16×16 as `scene.json`.
 fn setup(name: &str) -> PathBuf {
     let dir = common::workdir("cli-report", name);
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
-    let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    v["camera"]["width"] = 16.into();
-    v["camera"]["height"] = 16.into();
-    v["spp"] = 4.into();
-    std::fs::write(dir.join("scene.json"), v.to_string()).unwrap();
+    common::write_small_scene(&dir, "scene.json", |_| {});
     dir
 }
 
