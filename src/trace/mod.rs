@@ -369,8 +369,9 @@ impl<'a> Marcher<'a> {
         // Marching on one side needs only that side's bound.
         let inv_l = self.inv_l[usize::from(sign < 0.0)];
         let (mut t, mut g) = (from.t, from.g);
-        // Creep step inside the zone `g/L < MAX_CREEP · eps`: starts at `eps`, doubles on each consecutive
-        // creep step up to `MAX_CREEP · eps`, resets when the ray leaves the zone.
+        // The doubling creep step inside the zone `g/L < MAX_CREEP · eps` (when the secant says neither
+        // approaching nor leaving): starts at `eps`, doubles on each consecutive creep step up to
+        // `MAX_CREEP · eps`, resets when the ray leaves the zone.
         let mut creep = self.eps(t);
         // The previous sample on this side, for the secant's estimate of where the surface is.
         let mut previous: Option<(f32, f32)> = None;
