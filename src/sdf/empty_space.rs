@@ -29,7 +29,7 @@ use std::cmp::Ordering;
 /// Applies to a grid under similarity transforms whose surface stays inside the grid box.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmptySpace {
-    /// Rows of the linear part of the map from the shape's frame to lattice coordinates.
+    /// The linear part of the map from the shape's frame to lattice coordinates.
     to_lattice: glam::Mat3,
     /// Its offset: `u = to_lattice · x + offset`.
     offset: glam::Vec3,
