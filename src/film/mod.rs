@@ -10,8 +10,8 @@ pub use accumulate::{Film, Normalization, PixelFilm, SampleSink, SplatFilm, spla
 pub use adjoint::{AdjointFilm, AdjointTile};
 pub use filter::{Filter, Footprint};
 pub use output::{
-    Channels, check_output_path, read_exr, read_exr_rgb, srgb_encode, write_exr, write_exr_and_png,
-    write_png,
+    Channels, check_output_path, read_exr, read_exr_rgb, rgb_from_channels, srgb_encode, write_exr,
+    write_exr_and_png, write_png,
 };
 
 /// A linear-RGB image, row-major from the top row, three `f32` per pixel.

@@ -107,14 +107,27 @@ pub fn read_exr(path: &Path) -> crate::Result<(u32, u32, Channels)> {
 /// file, a missing channel (the message lists the file's channels), a non-finite value.
 pub fn read_exr_rgb(path: &Path) -> crate::Result<super::Image> {
     let (width, height, channels) = read_exr(path)?;
+    rgb_from_channels(path, (width, height), &channels, "", |name| {
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        format!("no channel {name} (channels: {})", names.join(", "))
+    })
+}
+
+/// The image in the channels `{prefix}R`, `{prefix}G`, `{prefix}B` of an EXR read with [`read_exr`]
+/// (`width × height` planes). Errors name `path`: a missing channel (worded by `missing`, given the
+/// channel's name), a non-finite value.
+pub fn rgb_from_channels(
+    path: &Path,
+    (width, height): (u32, u32),
+    channels: &[(String, Vec<f32>)],
+    prefix: &str,
+    missing: impl Fn(&str) -> String,
+) -> crate::Result<super::Image> {
     let mut image = super::Image::new(width, height);
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        let Some((_, plane)) = channels.iter().find(|(n, _)| n == name) else {
-            let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
-            return Err(Error::file(
-                path,
-                format!("no channel {name} (channels: {})", names.join(", ")),
-            ));
+    for (c, suffix) in ["R", "G", "B"].iter().enumerate() {
+        let name = format!("{prefix}{suffix}");
+        let Some((_, plane)) = channels.iter().find(|(n, _)| *n == name) else {
+            return Err(Error::file(path, missing(&name)));
         };
         if let Some(i) = plane.iter().position(|v| !v.is_finite()) {
             return Err(Error::file(

@@ -18,7 +18,7 @@
 use super::measure::{blurred_error, seed_noise};
 use super::subject::Subject;
 use crate::error::{Error, Result};
-use crate::film::{Image, read_exr};
+use crate::film::{Image, read_exr, rgb_from_channels};
 use std::path::Path;
 use std::time::Instant;
 
@@ -120,33 +120,17 @@ pub fn read_reference(
     }
     let mut images = Vec::new();
     for p in parameters {
-        let mut image = Image::new(width, height);
-        for (c, suffix) in ["R", "G", "B"].iter().enumerate() {
-            let name = format!("d.{p}.{suffix}");
-            let Some((_, plane)) = channels.iter().find(|(n, _)| *n == name) else {
-                let derivatives: Vec<&str> = (channels.iter().map(|(n, _)| n.as_str()))
-                    .filter(|n| n.starts_with("d."))
-                    .collect();
-                let has = if derivatives.is_empty() {
-                    "no derivative channels".to_string()
-                } else {
-                    format!("derivative channels: {}", derivatives.join(", "))
-                };
-                return Err(Error::file(
-                    path,
-                    format!("no channel {name} for parameter {p} ({has})"),
-                ));
+        let image = rgb_from_channels(path, (w, h), &channels, &format!("d.{p}."), |name| {
+            let derivatives: Vec<&str> = (channels.iter().map(|(n, _)| n.as_str()))
+                .filter(|n| n.starts_with("d."))
+                .collect();
+            let has = if derivatives.is_empty() {
+                "no derivative channels".to_string()
+            } else {
+                format!("derivative channels: {}", derivatives.join(", "))
             };
-            if let Some(i) = plane.iter().position(|v| !v.is_finite()) {
-                return Err(Error::file(
-                    path,
-                    format!("non-finite value in channel {name} at pixel {i}"),
-                ));
-            }
-            for (px, v) in image.rgb.chunks_exact_mut(3).zip(plane) {
-                px[c] = *v;
-            }
-        }
+            format!("no channel {name} for parameter {p} ({has})")
+        })?;
         images.push(image);
     }
     Ok(images)
