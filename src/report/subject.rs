@@ -6,8 +6,8 @@ use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::fd::{self, finite_difference};
 use crate::integrator::{
-    BoundaryBudget, DiffOptions, RenderOptions, render, render_derivatives_with_boundary,
-    render_interior,
+    BoundaryBudget, DerivativeImages, DiffOptions, RenderOptions, render,
+    render_derivatives_with_boundary, render_interior,
 };
 use crate::scene::Scene;
 
@@ -75,19 +75,42 @@ impl Subject {
     /// (e.g. a box pixel filter for the derivative estimators, a step out of a parameter's range for
     /// `fd`), or a derivative estimator asked of the image.
     pub fn run(&self, estimator: Estimator, spp: u32, seed: u64) -> Result<Image> {
-        let options = DiffOptions {
-            render: render_options(spp, seed),
-            ..DiffOptions::default()
-        };
         if estimator == Estimator::Primal {
-            return Ok(render(&self.plain, &options.render).0);
+            return Ok(render(&self.plain, &render_options(spp, seed)).0);
         }
         if estimator == Estimator::Fd {
             return self.finite_difference(self.step, spp, seed);
         }
+        Ok(self
+            .derivative_terms(estimator, spp, seed)?
+            .total()
+            .remove(0))
+    }
+
+    /// Whether the boundary terms (silhouettes and shadows) of the parameter are all zero at `spp`
+    /// samples per pixel: then the boundary-budget variants equal [`Estimator::Complete`] and say
+    /// nothing about the budgets. Errors: those of the complete derivative.
+    pub fn boundary_terms_vanish(&self, spp: u32, seed: u64) -> Result<bool> {
+        let out = self.derivative_terms(Estimator::Complete, spp, seed)?;
+        let terms = out.primary.iter().chain(&out.secondary);
+        Ok(terms.flat_map(|t| &t.rgb).all(|v| *v == 0.0))
+    }
+
+    /// The terms of a derivative estimator's run: the interior term alone, or all three with the
+    /// estimator's multiple of the default boundary budgets.
+    fn derivative_terms(
+        &self,
+        estimator: Estimator,
+        spp: u32,
+        seed: u64,
+    ) -> Result<DerivativeImages> {
         let scene = self.selected.as_ref().ok_or_else(no_parameter)?;
-        let out = match estimator.boundary_scale() {
-            None => render_interior(scene, 1, &options)?,
+        let options = DiffOptions {
+            render: render_options(spp, seed),
+            ..DiffOptions::default()
+        };
+        match estimator.boundary_scale() {
+            None => render_interior(scene, 1, &options),
             Some((num, den)) => {
                 let (primary, secondary) = BoundaryBudget::default().totals(scene, spp);
                 // At least one sample each, so that a quarter of a tiny budget still samples the term.
@@ -98,25 +121,9 @@ impl Subject {
                     &options,
                     scale(primary),
                     scale(secondary),
-                )?
+                )
             }
-        };
-        Ok(out.total().remove(0))
-    }
-
-    /// Whether the boundary terms (silhouettes and shadows) of the parameter are all zero at `spp`
-    /// samples per pixel: then the boundary-budget variants equal [`Estimator::Complete`] and say
-    /// nothing about the budgets. Errors: those of the complete derivative.
-    pub fn boundary_terms_vanish(&self, spp: u32, seed: u64) -> Result<bool> {
-        let scene = self.selected.as_ref().ok_or_else(no_parameter)?;
-        let options = DiffOptions {
-            render: render_options(spp, seed),
-            ..DiffOptions::default()
-        };
-        let (primary, secondary) = BoundaryBudget::default().totals(scene, spp);
-        let out = render_derivatives_with_boundary(scene, 1, &options, primary, secondary)?;
-        let terms = out.primary.iter().chain(&out.secondary);
-        Ok(terms.flat_map(|t| &t.rgb).all(|v| *v == 0.0))
+        }
     }
 
     /// Why `fd` cannot run with step `h` (a value `P ± h` out of the parameter's range, a step too
