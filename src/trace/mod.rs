@@ -635,9 +635,11 @@ pub fn first_crossing_skipping(
     t1: f32,
     settings: &TraceSettings,
 ) -> ShapeTrace {
-    let t0 = match space {
-        Some(space) => match space.first_candidate(ray, t0, t1) {
-            Some(t) => t,
+    // The ray in the lattice's coordinates, once for the first skip and the marcher's.
+    let space = space.map(|s| (s, s.lattice_ray(ray)));
+    let t0 = match &space {
+        Some((space, lattice_ray)) => match space.first_candidate_lattice(lattice_ray, t0, t1) {
+            Some(found) => found.t,
             None => return ShapeTrace::Miss,
         },
         None => t0,
@@ -647,7 +649,7 @@ pub fn first_crossing_skipping(
         Some((t, _)) => ShapeTrace::Hit(t[0]),
         None => {
             let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
-            m.space = space.map(|s| (s, s.lattice_ray(ray)));
+            m.space = space;
             m.first(t0)
         }
     }
