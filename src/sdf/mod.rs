@@ -27,6 +27,7 @@
 //! axis.
 
 mod bake;
+mod crease_edges;
 mod creases;
 mod csg;
 mod empty_space;
@@ -40,6 +41,7 @@ mod transform;
 mod validate;
 
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
+pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;

@@ -239,45 +239,47 @@ pub fn masked_abs(v: &[f64], mask: &[bool]) -> f64 {
 }
 
 /// What the camera ray through film point `(fx, fy)` hits first: the shape or emitter index (shapes
-/// `0..`, emitters `1000..`), or `usize::MAX` when it escapes.
-fn first_hit(scene: &Scene, fx: f32, fy: f32) -> usize {
+/// `0..`, emitters `1000..`), or `usize::MAX` when it escapes; and the normal there (zero on a miss).
+fn first_hit(scene: &Scene, fx: f32, fy: f32) -> (usize, glam::Vec3) {
     let ray: Ray = scene
         .camera
         .frame::<f32>()
         .generate_ray(glam::Vec2::new(fx, fy));
     match scene.intersect(&ray, f32::INFINITY) {
         Intersection::Hit(h) => match h.surface {
-            implicit_psdr::scene::Surface::Shape(i) => i,
-            implicit_psdr::scene::Surface::Emitter(i) => 1000 + i,
+            implicit_psdr::scene::Surface::Shape(i) => (i, h.n),
+            implicit_psdr::scene::Surface::Emitter(i) => (1000 + i, h.n),
         },
-        _ => usize::MAX,
+        _ => (usize::MAX, glam::Vec3::ZERO),
     }
 }
 
-/// The silhouette ring: pixels whose filter footprint (a 7×7 grid over ±`reach` px) sees more than one
-/// surface (or a surface and the background). Its complement holds the smooth pixels, where the primary
-/// term must vanish.
+/// The edge ring: pixels whose filter footprint (a 7×7 grid over ±`reach` px) sees more than one
+/// surface (or a surface and the background), or a crease (normals of neighbouring grid points more
+/// than 45° apart on one shape). Its complement holds the smooth pixels, where the primary term must
+/// vanish.
 pub fn edge_mask(scene: &Scene, reach: f32) -> Vec<bool> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mut mask = vec![false; (w * h) as usize];
     for y in 0..h {
         for x in 0..w {
-            let mut seen = None;
-            'grid: for j in 0..7 {
-                for i in 0..7 {
-                    let ox = reach * (i as f32 / 3.0 - 1.0);
-                    let oy = reach * (j as f32 / 3.0 - 1.0);
-                    let s = first_hit(scene, x as f32 + 0.5 + ox, y as f32 + 0.5 + oy);
-                    match seen {
-                        None => seen = Some(s),
-                        Some(t) if t != s => {
-                            mask[(y * w + x) as usize] = true;
-                            break 'grid;
-                        }
-                        _ => {}
-                    }
-                }
-            }
+            let hits: Vec<(usize, glam::Vec3)> = (0..49)
+                .map(|k| {
+                    let ox = reach * ((k % 7) as f32 / 3.0 - 1.0);
+                    let oy = reach * ((k / 7) as f32 / 3.0 - 1.0);
+                    first_hit(scene, x as f32 + 0.5 + ox, y as f32 + 0.5 + oy)
+                })
+                .collect();
+            let crease = |a: usize, b: usize| {
+                hits[a].0 != usize::MAX
+                    && hits[a].1.dot(hits[b].1) < std::f32::consts::FRAC_1_SQRT_2
+            };
+            let edge = (0..49).any(|k| {
+                hits[k].0 != hits[0].0
+                    || (k % 7 > 0 && crease(k, k - 1))
+                    || (k >= 7 && crease(k, k - 7))
+            });
+            mask[(y * w + x) as usize] = edge;
         }
     }
     mask
@@ -287,7 +289,7 @@ pub fn edge_mask(scene: &Scene, reach: f32) -> Vec<bool> {
 pub fn shape_mask(scene: &Scene, index: usize) -> Vec<bool> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     (0..w * h)
-        .map(|p| first_hit(scene, (p % w) as f32 + 0.5, (p / w) as f32 + 0.5) == index)
+        .map(|p| first_hit(scene, (p % w) as f32 + 0.5, (p / w) as f32 + 0.5).0 == index)
         .collect()
 }
 

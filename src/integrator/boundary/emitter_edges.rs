@@ -63,15 +63,16 @@
 //! anything before `x_B`'s depth (less a margin); its first vertex is `x_D`, its detached contribution
 //! `L_bg`.
 //!
-//! [`super::primary::render_primary_terms`] gives the primary term's samples to the silhouettes and to
-//! the outlines half and half when both exist ([`split_samples`]), all to one when the other is absent.
+//! [`super::primary::render_primary_terms`] shares the primary term's samples equally between the kinds
+//! of curves in view ([`super::primary::PrimarySources::split`]).
 
+use super::frustum::Frustum;
 use super::{
-    BACKGROUND_OFFSET_PIXELS, accumulate_samples, attached_first_vertex, background_offset,
-    background_radiance, finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
+    BACKGROUND_OFFSET_PIXELS, attached_first_vertex, background_offset, background_radiance,
+    film_velocity, finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
 };
 use crate::emitter::Outline;
-use crate::film::{Film, Image, SampleSink};
+use crate::film::{Film, SampleSink};
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::RenderOptions;
@@ -79,7 +80,6 @@ use crate::integrator::path::{PathRecord, TraceCounters, VertexKind};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
 use crate::scalar::Directions;
-use crate::scalar::Scalar;
 use crate::scene::Scene;
 
 /// The random stream of emitter-outline samples (distinct from the silhouettes' and the camera's).
@@ -258,98 +258,7 @@ impl EmitterOutlines {
     }
 }
 
-/// The view frustum grown by the filter radius plus one pixel: half-spaces `n·(x − eye) ≥ offset`.
-struct Frustum {
-    eye: glam::Vec3,
-    planes: [(glam::Vec3, f32); 5],
-}
-
-impl Frustum {
-    fn of(scene: &Scene) -> Self {
-        let frame = scene.camera.frame::<f32>();
-        let (r, up, fwd): (glam::Vec3, glam::Vec3, glam::Vec3) =
-            (frame.right.into(), frame.up.into(), frame.forward.into());
-        let f = frame.focal;
-        let (cx, cy) = frame.center;
-        let grow = scene.camera.filter.radius() + 1.0;
-        let (w, h) = (scene.camera.width as f32, scene.camera.height as f32);
-        // x = cx + f (q·r)/z ≥ −grow  ⇔  f q·r + (cx + grow) z ≥ 0, and likewise for the other sides.
-        let planes = [
-            (r * f + fwd * (cx + grow), 0.0),
-            (fwd * (w + grow - cx) - r * f, 0.0),
-            (fwd * (cy + grow) - up * f, 0.0),
-            (up * f + fwd * (h + grow - cy), 0.0),
-            // In front of the eye (the projection needs z > 0).
-            (fwd, 4.0 * scene.trace.eps_at_point(frame.origin.into())),
-        ];
-        Self {
-            eye: frame.origin.into(),
-            planes,
-        }
-    }
-
-    /// The part of the segment `a b` inside, if any.
-    fn clip(&self, a: glam::Vec3, b: glam::Vec3) -> Option<(glam::Vec3, glam::Vec3)> {
-        let (mut t0, mut t1) = (0.0f32, 1.0f32);
-        for (n, off) in self.planes {
-            let (ga, gb) = (n.dot(a - self.eye) - off, n.dot(b - self.eye) - off);
-            if ga < 0.0 && gb < 0.0 {
-                return None;
-            }
-            if ga < 0.0 {
-                t0 = t0.max(ga / (ga - gb));
-            } else if gb < 0.0 {
-                t1 = t1.min(ga / (ga - gb));
-            }
-        }
-        (t0 < t1).then(|| (a + (b - a) * t0, a + (b - a) * t1))
-    }
-
-    /// True when the ball is entirely outside one of the planes.
-    fn misses_ball(&self, o: glam::Vec3, r: f32) -> bool {
-        self.planes.iter().any(|&(n, off)| {
-            let len = n.length();
-            len > 0.0 && (n.dot(o - self.eye) - off) / len < -r
-        })
-    }
-}
-
-/// How [`super::primary`] shares `samples` between shape silhouettes and emitter outlines:
-/// `(silhouette samples, outline samples)`, half each when both exist.
-pub fn split_samples(samples: u64, silhouettes: bool, outlines: bool) -> (u64, u64) {
-    match (silhouettes, outlines) {
-        (true, true) => (samples - samples / 2, samples / 2),
-        (false, true) => (0, samples),
-        _ => (samples, 0),
-    }
-}
-
-/// Adds the outline part of the primary term (eq. (2), `samples` samples of [`EDGE_STREAM`]) to
-/// `radiance[k]` and `coverage[k]` (directions `k < width` of `S`), the layout of
-/// [`super::primary::PrimaryTerm`]. Nothing to do when `outlines` is empty or `samples` is 0.
-pub fn add_outline_pass<S: Directions>(
-    scene: &Scene,
-    outlines: &EmitterOutlines,
-    width: usize,
-    render: &RenderOptions,
-    samples: u64,
-    radiance: &mut [Image],
-    coverage: &mut [Image],
-) -> RenderStats {
-    if outlines.is_empty() {
-        return RenderStats::default();
-    }
-    accumulate_samples::<S>(
-        scene,
-        width,
-        samples,
-        |film| run_outlines::<S, _>(scene, outlines, render, samples, film),
-        radiance,
-        coverage,
-    )
-}
-
-/// The outline samples `0..samples` of [`add_outline_pass`] into any film (their shares not yet divided
+/// The outline samples `0..samples` of eq. (2) into any film (their shares not yet divided
 /// by `samples`).
 pub(crate) fn run_outlines<S: Directions, F: Film>(
     scene: &Scene,
@@ -383,13 +292,6 @@ where
             );
         },
     )
-}
-
-/// The film velocity `∂π P_π(x)` of an attached point (derivative parts only; primal 0).
-#[inline]
-fn film_velocity<S: Scalar>(frame: &crate::camera::CameraFrame<S>, x: Vec3<S>) -> Option<(S, S)> {
-    let (px, py) = frame.project(x)?;
-    Some((px - px.detach(), py - py.detach()))
 }
 
 /// One sample of eq. (2): pushes `(pixel, radiance, coverage)` splats (not yet divided by `N`).

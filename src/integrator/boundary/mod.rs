@@ -10,7 +10,9 @@
 //! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Both integrators
 //! (`direct` is `path` with one scattering vertex).
 
+pub mod crease_edges;
 pub mod emitter_edges;
+mod frustum;
 pub mod primary;
 pub mod secondary;
 pub mod segment;
@@ -165,6 +167,21 @@ pub(crate) fn projection_jacobian(
     ))
 }
 
+/// Whether the camera `ray` (`frame` the camera's) meets anything before an edge at distance `dist`
+/// from the eye, less a margin of four `delta` (from [`background_offset`]) and eight camera-ray
+/// tolerances: the edge's own faces, met near `dist` by a ray passing next to it, do not count.
+pub(crate) fn hidden_before(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    ray: Ray,
+    dist: f32,
+    delta: f32,
+    counters: &mut TraceCounters,
+) -> bool {
+    let margin = 4.0 * delta + 8.0 * camera_ray_eps(scene, frame.spread(ray.d), dist);
+    occluded(scene, &ray, dist - margin, None, counters)
+}
+
 /// The background radiance beyond an edge at distance `dist` from the eye, seen along the camera `ray`
 /// just outside it (`delta` from [`background_offset`]; `frame` the camera's, whose
 /// [`CameraFrame::spread`] the ray resolves): `None` when something nearer hides the edge; else one
@@ -181,11 +198,10 @@ pub(crate) fn background_radiance(
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> Option<glam::Vec3> {
-    let spread = frame.spread(ray.d);
-    let margin = 4.0 * delta + 8.0 * camera_ray_eps(scene, spread, dist);
-    if occluded(scene, &ray, dist - margin, None, counters) {
+    if hidden_before(scene, frame, ray, dist, delta, counters) {
         return None;
     }
+    let spread = frame.spread(ray.d);
     let depth = scene.integrator.max_scatter();
     trace_path(scene, ray, spread, depth, sampler, record, counters);
     Some(contribution::<f32>(scene, record, detached).into())
@@ -202,4 +218,11 @@ pub(crate) fn attached_first_vertex<S: Scalar>(
         VertexKind::Emitter(e) => Some(attach.emitter_vertex::<S>(e, v.p, v.n).x),
         VertexKind::Environment(_) => None,
     })
+}
+
+/// The film velocity `∂π P_π(x)` of an attached point (derivative parts only; primal 0).
+#[inline]
+pub(crate) fn film_velocity<S: Scalar>(frame: &CameraFrame<S>, x: Vec3<S>) -> Option<(S, S)> {
+    let (px, py) = frame.project(x)?;
+    Some((px - px.detach(), py - py.detach()))
 }

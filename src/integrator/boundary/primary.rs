@@ -101,7 +101,8 @@
 //! both kinds are in view). Not included: crease edges (listed by
 //! [`crate::scene::Scene::creased_shapes`]), the film edges.
 
-use super::emitter_edges::{self, EmitterOutlines};
+use super::crease_edges::{CreaseEdges, run_creases};
+use super::emitter_edges::{EmitterOutlines, run_outlines};
 use super::segment::is_silhouette_direction;
 use super::{
     accumulate_samples, attached_first_vertex, background_offset, background_radiance,
@@ -111,7 +112,7 @@ use crate::error::Result;
 use crate::film::{Film, Image, Normalization, SampleSink};
 use crate::integrator::attach::{SceneAttach, for_each_window};
 use crate::integrator::driver::RenderStats;
-use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
+use crate::integrator::options::{DiffOptions, Progress, RenderOptions, require_continuous_filter};
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::silhouette_curve::{
     CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
@@ -171,7 +172,7 @@ impl PrimaryTerm {
 }
 
 /// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` boundary samples for the whole
-/// image, shared by shape silhouettes and emitter outlines ([`emitter_edges::split_samples`]). Errors as
+/// image, shared by shape silhouettes, emitter outlines and crease edges ([`PrimarySources::split`]). Errors as
 /// [`render_primary`].
 pub fn render_primary_terms(
     scene: &Scene,
@@ -198,26 +199,24 @@ pub fn render_primary_in<S: Directions>(
             stats,
         });
     }
-    let curves = silhouettes(scene)?;
-    // Edges of emitters seen directly ([`emitter_edges`]) share the samples.
-    let outlines = EmitterOutlines::seen_from(scene);
-    let (n_curves, n_outlines) =
-        emitter_edges::split_samples(samples, !curves.is_empty(), !outlines.is_empty());
-    let seed = options.render.seed;
-    let progress = &options.render.progress;
+    let sources = PrimarySources::of(scene)?;
     let mut radiance = Vec::with_capacity(count);
     let mut coverage = Vec::with_capacity(count);
     for (r, c, s) in for_each_window(scene, count, S::COUNT, |windowed, width| {
-        let (mut r, mut c, mut s) = pass::<S>(windowed, &curves, width, seed, n_curves, progress);
-        s.absorb(emitter_edges::add_outline_pass::<S>(
-            windowed,
-            &outlines,
-            width,
-            &options.render,
-            n_outlines,
-            &mut r,
-            &mut c,
-        ));
+        let (w, h) = (windowed.camera.width, windowed.camera.height);
+        let mut r = vec![Image::new(w, h); width];
+        let mut c = vec![Image::new(w, h); width];
+        let mut s = RenderStats::default();
+        for (source, n) in sources.split(samples) {
+            s.absorb(accumulate_samples::<S>(
+                windowed,
+                width,
+                n,
+                |film| sources.run::<S, _>(windowed, source, &options.render, n, film),
+                &mut r,
+                &mut c,
+            ));
+        }
         (r, c, s)
     }) {
         radiance.extend(r);
@@ -229,6 +228,91 @@ pub fn render_primary_in<S: Directions>(
         coverage,
         stats,
     })
+}
+
+/// One kind of curve the primary term samples ([`PrimarySources`]).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum PrimarySource {
+    /// Silhouettes of shapes with curved surfaces ([`silhouettes`]).
+    Silhouettes,
+    /// Outlines of finite emitters seen directly ([`super::emitter_edges`]).
+    EmitterOutlines,
+    /// Crease edges of sharp boxes and cylinders ([`super::crease_edges`]).
+    CreaseEdges,
+}
+
+/// Everything the primary term samples, found once per render: shape silhouettes, emitter outlines and
+/// crease edges in view.
+#[derive(Clone, Debug)]
+pub struct PrimarySources {
+    /// The silhouette curves, per shape index.
+    pub curves: Vec<(usize, SilhouetteCurve)>,
+    /// The outlines of emitters in view.
+    pub outlines: EmitterOutlines,
+    /// The crease edges in view.
+    pub creases: CreaseEdges,
+}
+
+impl PrimarySources {
+    /// The curves of `scene` seen from its camera. Errors: a failed silhouette extraction.
+    pub fn of(scene: &Scene) -> Result<Self> {
+        Ok(Self {
+            curves: silhouettes(scene)?,
+            outlines: EmitterOutlines::seen_from(scene),
+            creases: CreaseEdges::seen_from(scene),
+        })
+    }
+
+    /// How `samples` primary samples are shared: equally between the kinds that have curves in view
+    /// (the first ones get the remainder); kinds with none get no entry.
+    pub fn split(&self, samples: u64) -> Vec<(PrimarySource, u64)> {
+        let kinds: Vec<PrimarySource> = [
+            (PrimarySource::Silhouettes, !self.curves.is_empty()),
+            (PrimarySource::EmitterOutlines, !self.outlines.is_empty()),
+            (PrimarySource::CreaseEdges, !self.creases.is_empty()),
+        ]
+        .into_iter()
+        .filter_map(|(kind, present)| present.then_some(kind))
+        .collect();
+        let n = kinds.len() as u64;
+        kinds
+            .into_iter()
+            .enumerate()
+            .map(|(i, kind)| (kind, samples / n + u64::from((i as u64) < samples % n)))
+            .filter(|&(_, k)| k > 0)
+            .collect()
+    }
+
+    /// `samples` samples of one kind into any film (their shares not yet divided by `samples`); the
+    /// seed is `render.seed`.
+    pub(crate) fn run<S: Directions, F: Film>(
+        &self,
+        scene: &Scene,
+        source: PrimarySource,
+        render: &RenderOptions,
+        samples: u64,
+        film: &mut F,
+    ) -> RenderStats
+    where
+        F::Tile: SampleSink<S>,
+    {
+        match source {
+            PrimarySource::Silhouettes => run_curves::<S, F>(
+                scene,
+                &self.curves,
+                render.seed,
+                samples,
+                &render.progress,
+                film,
+            ),
+            PrimarySource::EmitterOutlines => {
+                run_outlines::<S, F>(scene, &self.outlines, render, samples, film)
+            }
+            PrimarySource::CreaseEdges => {
+                run_creases::<S, F>(scene, &self.creases, render, samples, film)
+            }
+        }
+    }
 }
 
 /// The silhouette curves seen from the camera centre of every shape with finite bounds and curved
@@ -249,34 +333,8 @@ pub fn silhouettes(scene: &Scene) -> Result<Vec<(usize, SilhouetteCurve)>> {
     Ok(curves)
 }
 
-/// One pass over all samples: directions `0..width` of `S`.
-fn pass<S: Directions>(
-    scene: &Scene,
-    curves: &[(usize, SilhouetteCurve)],
-    width: usize,
-    seed: u64,
-    samples: u64,
-    progress: &Progress,
-) -> (Vec<Image>, Vec<Image>, RenderStats) {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let mut images = vec![Image::new(w, h); width];
-    let mut coverage = vec![Image::new(w, h); width];
-    if curves.is_empty() {
-        return (images, coverage, RenderStats::default());
-    }
-    let stats = accumulate_samples::<S>(
-        scene,
-        width,
-        samples,
-        |film| run_curves::<S, _>(scene, curves, seed, samples, progress, film),
-        &mut images,
-        &mut coverage,
-    );
-    (images, coverage, stats)
-}
-
 /// The silhouette samples `0..samples` into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_curves<S: Directions, F: Film>(
+fn run_curves<S: Directions, F: Film>(
     scene: &Scene,
     curves: &[(usize, SilhouetteCurve)],
     seed: u64,

@@ -24,8 +24,7 @@ pub use loss::Loss;
 
 use crate::error::{Error, Result};
 use crate::film::{AdjointFilm, Image, Normalization};
-use crate::integrator::boundary::emitter_edges::{self, EmitterOutlines, run_outlines};
-use crate::integrator::boundary::primary::{run_curves, silhouettes};
+use crate::integrator::boundary::primary::PrimarySources;
 use crate::integrator::boundary::secondary::run_segments;
 use crate::integrator::boundary::tangent_sampling::TangentSampling;
 use crate::integrator::diff::interior;
@@ -193,22 +192,10 @@ pub fn render_gradient_with_image(
     let (n_primary, n_secondary) = options.boundary.totals(scene, spp);
     let mut primary = vec![0.0; n];
     if n_primary > 0 {
-        let curves = silhouettes(scene)?;
-        let outlines = EmitterOutlines::seen_from(scene);
-        let (n_curves, n_outlines) =
-            emitter_edges::split_samples(n_primary, !curves.is_empty(), !outlines.is_empty());
-        let seed = render_options.seed;
-        let progress = &render_options.progress;
-        for (samples, is_curves) in [(n_curves, true), (n_outlines, false)] {
-            if samples == 0 {
-                continue;
-            }
+        let sources = PrimarySources::of(scene)?;
+        for (source, samples) in sources.split(n_primary) {
             let mut f = film(1.0 / samples as f32);
-            let s = if is_curves {
-                run_curves::<Rev, _>(scene, &curves, seed, samples, progress, &mut f)
-            } else {
-                run_outlines::<Rev, _>(scene, &outlines, render_options, samples, &mut f)
-            };
+            let s = sources.run::<Rev, _>(scene, source, render_options, samples, &mut f);
             stats.absorb(s);
             invalid += f.invalid;
             add(&mut primary, &f.gradient);

@@ -1,0 +1,393 @@
+//! The primary boundary term along crease edges seen from the camera (docs/theory.md §7.2): the
+//! edges of sharp boxes and cylinders, where the surface's normal jumps (the rest of the primary term is
+//! [`super::primary`]; read its module docs first).
+//!
+//! # The jump, on both sides
+//!
+//! Across the image `Γ` of a visible crease the radiance jumps: between the two faces when both face the
+//! camera (their shading differs), between a face and the background beyond it when one face turns away
+//! (a silhouette made of edges). In film space the pixel's derivative gains `∫_Γ w_j (L₋ − L₊) v dℓ_img`,
+//! `v` the edge image's normal velocity towards the `+` side (`n_img`), `L∓` the radiance on either side.
+//!
+//! The interior term already moves each side's region with its own parametrisation: a face's points
+//! move along the face's normal (`x + V n`, docs/theory.md §2), the background's points with theirs. At a
+//! smooth silhouette the occluder's normal motion moves its contour exactly (the ray is tangent there);
+//! at a crease it does not: the true edge slides along each face relative to that face's attached points,
+//! because the two faces move along different normals. What the interior misses on each side is the
+//! motion of the edge relative to that side's parametrisation:
+//!
+//! ```text
+//!   ∂I_j ⊃ ∫_Γ w_j [ L₋ (v − u̇₋) − L₊ (v − u̇₊) ] dℓ_img                                          (1)
+//! ```
+//!
+//! `u̇∓ = ∂π P_π(y∓(π))·n_img` the film velocity of the attached first vertex `y∓` seen on that side (a
+//! face point next to the edge, or the background point; for a background at infinity the fixed
+//! direction projected with the lifted camera, as the interior does). At a smooth silhouette the
+//! occluder's `u̇ = v` and (1) is eq. (1) of [`super::primary`]. The pixel filter's own integral `W` has
+//! the value 1 on both sides (docs/theory.md §6.2):
+//!
+//! ```text
+//!   ∂W_j ⊃ ∫_Γ w_j [ (v − u̇₋) − (v − u̇₊) ] dℓ_img = ∫_Γ w_j (u̇₊ − u̇₋) dℓ_img                   (2)
+//! ```
+//!
+//! # The edge's velocity, by AD
+//!
+//! The edge is `{F_a = 0, F_b = 0}` ([`crate::sdf::CreaseEdge`]: the two faces' functions). Its point
+//! `x_C` moves, to first order, to `x_C(π) = x_C − α ∇F_a − β ∇F_b` with `(α, β)` solving
+//! `[∇F_a·∇F_a  ∇F_a·∇F_b; ∇F_a·∇F_b  ∇F_b·∇F_b] (α, β) = (∂πF_a, ∂πF_b)`, both residuals evaluated with
+//! lifted parameters at the fixed `x_C`: the smallest displacement that keeps both faces at zero. Its
+//! motion along the edge is arbitrary and projects along `Γ`; so `v = ∂π P_π(x_C(π))·n_img`, the
+//! projection with the lifted camera (camera parameters move the image too).
+//!
+//! # Sampling
+//!
+//! Edge points are uniform on the total length `Λ` of the edges in view (segments clipped to the view
+//! frustum grown by the filter's reach, rims culled whole); the term's integrand is 0 where the edge is
+//! not on the shape's surface (a box edge inside another CSG child, or cut away: `|φ| > eps` there) or is
+//! hidden (the ray from the eye meets something before it). A sample at `x_C` contributes, to every pixel
+//! whose filter covers `u_C = P(x_C)`,
+//!
+//! ```text
+//!   w_j(u_C) · [ L₋ (v − u̇₋) − L₊ (v − u̇₊) ] · |P'T| · Λ                                           (3)
+//! ```
+//!
+//! with `L∓` one camera path each (the integrator's own estimator) through `u_C ∓ ε n_img`, `ε` = 1/50
+//! pixel, averaged over the `N` samples of its own random stream ([`CREASE_STREAM`]).
+//!
+//! **Not included here**: the shadows of crease edges (the secondary term along them), and the creases
+//! where two CSG children cross ([`crate::sdf::Sdf::creases`] lists what remains).
+
+use super::frustum::Frustum;
+use super::{
+    BACKGROUND_OFFSET_PIXELS, attached_first_vertex, background_offset, film_velocity,
+    finite_splat, hidden_before, on_film, projection_jacobian, run_samples, splat_on_film,
+};
+use crate::film::{Film, SampleSink};
+use crate::integrator::attach::SceneAttach;
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::RenderOptions;
+use crate::integrator::path::{PathRecord, TraceCounters, contribution, detached, trace_path};
+use crate::math::Vec3;
+use crate::sampler::Sampler;
+use crate::scalar::{Directions, DualVec3, Scalar};
+use crate::scene::{Scene, Shape};
+use crate::sdf::{CreaseEdge, EdgeCurve};
+
+/// The random stream of crease-edge samples (distinct from the silhouettes', outlines' and camera's).
+pub const CREASE_STREAM: u64 = 0xC2EA_5E0E;
+
+/// One piece of a crease edge in view, in world coordinates.
+#[derive(Clone, Debug, PartialEq)]
+struct Piece {
+    /// Index of the shape in [`Scene::shapes`].
+    shape: usize,
+    /// Index of the edge in `CreaseEdges::edges`.
+    edge: usize,
+    /// The (clipped) curve.
+    curve: EdgeCurve,
+}
+
+/// A sampled edge point.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct EdgePoint {
+    /// The point (world coordinates).
+    pub x: glam::Vec3,
+    /// Unit tangent of the edge.
+    pub tangent: glam::Vec3,
+    /// Index of the shape in [`Scene::shapes`].
+    pub shape: usize,
+    /// Index of the edge in [`CreaseEdges::edge`].
+    pub edge: usize,
+}
+
+/// The crease edges of the scene's shapes that may project onto the film, for sampling by length.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CreaseEdges {
+    /// Every shape's edges, in the shape's own coordinates (`(shape, edge)`).
+    edges: Vec<(usize, CreaseEdge)>,
+    pieces: Vec<Piece>,
+    /// Cumulative lengths (`cumulative[i]` = total length of pieces `0..=i`).
+    cumulative: Vec<f32>,
+}
+
+impl CreaseEdges {
+    /// The crease edges of `scene`'s shapes ([`crate::sdf::Sdf::crease_edges`]) in view from its camera.
+    pub fn seen_from(scene: &Scene) -> Self {
+        let frustum = Frustum::of(scene);
+        let mut edges = Vec::new();
+        let mut pieces = Vec::new();
+        for (i, shape) in scene.shapes.iter().enumerate() {
+            let t = shape.translate.value();
+            for e in shape.sdf.crease_edges() {
+                let curve = match e.curve {
+                    EdgeCurve::Segment { a, b } => match frustum.clip(a + t, b + t) {
+                        Some((a, b)) => EdgeCurve::Segment { a, b },
+                        None => continue,
+                    },
+                    EdgeCurve::Circle {
+                        centre,
+                        radius,
+                        e1,
+                        e2,
+                    } => {
+                        if frustum.misses_ball(centre + t, radius) {
+                            continue;
+                        }
+                        EdgeCurve::Circle {
+                            centre: centre + t,
+                            radius,
+                            e1,
+                            e2,
+                        }
+                    }
+                };
+                let length = curve.length();
+                if length > 0.0 && length.is_finite() {
+                    pieces.push(Piece {
+                        shape: i,
+                        edge: edges.len(),
+                        curve,
+                    });
+                }
+                edges.push((i, e));
+            }
+        }
+        let mut total = 0.0;
+        let cumulative = pieces
+            .iter()
+            .map(|p| {
+                total += p.curve.length();
+                total
+            })
+            .collect();
+        Self {
+            edges,
+            pieces,
+            cumulative,
+        }
+    }
+
+    /// True when no crease edge is in view.
+    pub fn is_empty(&self) -> bool {
+        self.pieces.is_empty()
+    }
+
+    /// Total length `Λ` of the edges in view (scene units); the sampling density is `1/Λ` per unit
+    /// length.
+    pub fn total_length(&self) -> f32 {
+        self.cumulative.last().copied().unwrap_or(0.0)
+    }
+
+    /// Edge `i` (its shape's index and the edge in the shape's coordinates).
+    pub fn edge(&self, i: usize) -> &(usize, CreaseEdge) {
+        &self.edges[i]
+    }
+
+    /// A point uniform on the total length from two uniform numbers in `[0, 1)`; `None` when empty.
+    pub fn sample(&self, u: [f32; 2]) -> Option<EdgePoint> {
+        if self.pieces.is_empty() {
+            return None;
+        }
+        let target = u[0] * self.total_length();
+        let i = self
+            .cumulative
+            .partition_point(|&c| c <= target)
+            .min(self.pieces.len() - 1);
+        let piece = &self.pieces[i];
+        let (x, tangent) = piece.curve.at(u[1]);
+        Some(EdgePoint {
+            x,
+            tangent,
+            shape: piece.shape,
+            edge: piece.edge,
+        })
+    }
+}
+
+/// `∇F` of a face function of `edge` on `shape` at the world point `x` (f32, by forward-mode AD).
+fn face_gradient(shape: &Shape, edge: &CreaseEdge, face: usize, x: glam::Vec3) -> glam::Vec3 {
+    let p = x - shape.translate.value();
+    let p = Vec3::new(
+        DualVec3::from_re(p.x).derivative(0),
+        DualVec3::from_re(p.y).derivative(1),
+        DualVec3::from_re(p.z).derivative(2),
+    );
+    match shape
+        .sdf
+        .face_value(&edge.path, edge.faces[face], p)
+        .and_then(|v| v.eps.0)
+    {
+        Some(g) => glam::Vec3::new(g[0], g[1], g[2]),
+        None => glam::Vec3::ZERO,
+    }
+}
+
+/// The edge point `x_C` moved with the lifted parameters (see the [module docs](self)): `x_C` minus the
+/// smallest displacement that keeps both faces at zero. `None` where the faces' gradients are (nearly)
+/// parallel or a face does not evaluate.
+pub fn moving_edge_point<S: Scalar>(
+    shape: &Shape,
+    edge: &CreaseEdge,
+    x: glam::Vec3,
+) -> Option<Vec3<S>> {
+    let p = Vec3::<S>::constant(x) - shape.translate.get::<S>();
+    let residual = |face: usize| -> Option<S> {
+        let f = shape.sdf.face_value(&edge.path, edge.faces[face], p)?;
+        Some(f - f.detach())
+    };
+    let (ra, rb) = (residual(0)?, residual(1)?);
+    let (ga, gb) = (
+        face_gradient(shape, edge, 0, x),
+        face_gradient(shape, edge, 1, x),
+    );
+    let (aa, ab, bb) = (ga.dot(ga), ga.dot(gb), gb.dot(gb));
+    let det = aa * bb - ab * ab;
+    if !(det > 1e-6 * aa * bb && det.is_finite()) {
+        return None;
+    }
+    let alpha = (ra * bb - rb * ab) / det;
+    let beta = (rb * aa - ra * ab) / det;
+    Some(Vec3::constant(x) - Vec3::constant(ga) * alpha - Vec3::constant(gb) * beta)
+}
+
+/// The crease samples `0..samples` of eq. (3) into any film (their shares not yet divided by
+/// `samples`).
+pub(crate) fn run_creases<S: Directions, F: Film>(
+    scene: &Scene,
+    creases: &CreaseEdges,
+    render: &RenderOptions,
+    samples: u64,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    if creases.is_empty() {
+        return RenderStats::default();
+    }
+    let attach = SceneAttach::new(scene);
+    run_samples::<S, F, _>(
+        film,
+        samples,
+        ("primary (crease edges)", &render.progress),
+        PathRecord::default,
+        |record, counters, k, splats| {
+            let mut sampler = Sampler::new(render.seed, CREASE_STREAM, 0, k);
+            sample(
+                scene,
+                &attach,
+                creases,
+                &mut sampler,
+                record,
+                splats,
+                counters,
+            );
+        },
+    )
+}
+
+/// One sample of eq. (3): pushes `(pixel, radiance, coverage)` splats (not yet divided by `N`).
+fn sample<S: Directions>(
+    scene: &Scene,
+    attach: &SceneAttach,
+    creases: &CreaseEdges,
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    splats: &mut impl SampleSink<S>,
+    counters: &mut TraceCounters,
+) {
+    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
+    let Some(pt) = creases.sample([u0, u1]) else {
+        return;
+    };
+    let (shape_index, edge) = creases.edge(pt.edge);
+    let shape = &scene.shapes[*shape_index];
+    let x = pt.x;
+    // Only where the edge is on the shape's surface (not inside another CSG child, not cut away).
+    if !(shape.eval_f32(x).abs() <= scene.trace.eps_at_point(x)) {
+        return;
+    }
+    let frame = scene.camera.frame::<f32>();
+    let eye: glam::Vec3 = frame.origin.into();
+    let q = x - eye;
+    let dist = q.length();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return;
+    }
+    let Some((px, py)) = frame.project(Vec3::constant(x)) else {
+        return;
+    };
+    if !on_film(scene, px, py) {
+        return;
+    }
+    let Some((du, dv)) = projection_jacobian(&frame, q) else {
+        return;
+    };
+    let t_img = glam::Vec2::new(du.dot(pt.tangent), dv.dot(pt.tangent));
+    let len_img = t_img.length();
+    if !(len_img > 0.0 && len_img.is_finite()) {
+        return;
+    }
+    let n_img = glam::Vec2::new(-t_img.y, t_img.x) / len_img;
+    let delta = background_offset(scene, dist, frame.focal);
+    let Some(to_edge) = q.try_normalize() else {
+        return;
+    };
+    if hidden_before(
+        scene,
+        &frame,
+        crate::math::Ray::new(eye, to_edge),
+        dist,
+        delta,
+        counters,
+    ) {
+        return;
+    }
+    let fs = scene.camera.frame::<S>();
+    let Some(x_c) = moving_edge_point::<S>(shape, edge, x) else {
+        return;
+    };
+    let Some((ex, ey)) = film_velocity(&fs, x_c) else {
+        return;
+    };
+    let v = ex * n_img.x + ey * n_img.y;
+    // Each side: its radiance and its parametrisation's film velocity along n_img.
+    // The sides' rays pass `delta` from the edge (at least four camera-ray tolerances), in pixels.
+    let z = q.dot(frame.forward.into());
+    let off_pixels = (delta * frame.focal / z).max(BACKGROUND_OFFSET_PIXELS);
+    let mut side = |sign: f32| -> Option<(glam::Vec3, S)> {
+        let off = sign * off_pixels;
+        let ray = frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y));
+        let depth = scene.integrator.max_scatter();
+        trace_path(
+            scene,
+            ray,
+            frame.spread(ray.d),
+            depth,
+            sampler,
+            record,
+            counters,
+        );
+        let l: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
+        let y = attached_first_vertex::<S>(attach, record)
+            .unwrap_or_else(|| fs.origin + Vec3::constant(ray.d));
+        let (yx, yy) = film_velocity(&fs, y)?;
+        Some((l, yx * n_img.x + yy * n_img.y))
+    };
+    let Some((l_minus, u_minus)) = side(-1.0) else {
+        return;
+    };
+    let Some((l_plus, u_plus)) = side(1.0) else {
+        return;
+    };
+    let measure = len_img * creases.total_length();
+    if !(measure.is_finite() && l_minus.is_finite() && l_plus.is_finite()) {
+        return;
+    }
+    let value = (Vec3::<S>::constant(l_minus * measure) * (v - u_minus))
+        - (Vec3::<S>::constant(l_plus * measure) * (v - u_plus));
+    let cover = (u_plus - u_minus) * S::constant(measure);
+    if finite_splat(&value, cover) {
+        splat_on_film(scene, (px, py), value, cover, splats);
+    }
+}

@@ -1,0 +1,383 @@
+//! The crease edges of primitives in closed form (docs/theory.md §7): a sharp box's twelve edges and a
+//! sharp cylinder's two rims, wherever they sit in an SDF tree (under transforms, inside CSG), as curves
+//! in the tree's coordinates together with the two faces that meet there.
+//!
+//! Each face is a function `F(x)` whose zero set is the face's plane (or the cylinder's side or cap)
+//! near the edge: for a box face along axis `i` on side `s`, `F = s (x_i − c_i) − h_i`; for a cylinder
+//! with axis `a`, `F = ρ − R` on its side and `F = s (x − c)·a − H` on its caps. The edge is
+//! `{F_a = 0, F_b = 0}`; [`Sdf::face_value`] evaluates either function generically, through the
+//! transforms above the primitive, so that the edge's motion under any parameter follows by AD.
+//!
+//! An edge of a primitive inside a CSG tree is on the tree's surface only where the other children leave
+//! it there (a box edge inside a union's other child, or cut away by an intersection, is not): the
+//! caller checks `φ ≈ 0` at each point it uses. Creases where two CSG children cross are not listed
+//! here ([`Sdf::creases`] still reports them).
+
+use super::{Sdf, transform};
+use crate::math::Vec3;
+use crate::scalar::Scalar;
+
+/// One face of a primitive next to a crease edge.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Face {
+    /// The box face `s (x_axis − c_axis) − h_axis = 0`, `positive` for `s = +1`.
+    BoxSide {
+        /// Axis index (0, 1, 2).
+        axis: usize,
+        /// Whether the face is on the positive side.
+        positive: bool,
+    },
+    /// The cylinder's side `ρ − R = 0`.
+    CylinderSide,
+    /// A cylinder cap `s (x − c)·a − H = 0`, `positive` for `s = +1`.
+    CylinderCap {
+        /// Whether the cap is on the positive side of the axis.
+        positive: bool,
+    },
+}
+
+/// The shape of a crease edge, in the coordinates of the tree it was listed from.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum EdgeCurve {
+    /// The straight edge from `a` to `b`.
+    Segment {
+        /// First end.
+        a: glam::Vec3,
+        /// Second end.
+        b: glam::Vec3,
+    },
+    /// The circle `centre + radius (cos θ e1 + sin θ e2)`, `e1 ⊥ e2` unit vectors.
+    Circle {
+        /// Centre.
+        centre: glam::Vec3,
+        /// Radius.
+        radius: f32,
+        /// First in-plane axis.
+        e1: glam::Vec3,
+        /// Second in-plane axis.
+        e2: glam::Vec3,
+    },
+}
+
+impl EdgeCurve {
+    /// Length (scene units).
+    pub fn length(&self) -> f32 {
+        match self {
+            EdgeCurve::Segment { a, b } => (*b - *a).length(),
+            EdgeCurve::Circle { radius, .. } => std::f32::consts::TAU * radius,
+        }
+    }
+
+    /// The point at fraction `u ∈ [0, 1)` of the length, and the unit tangent there.
+    pub fn at(&self, u: f32) -> (glam::Vec3, glam::Vec3) {
+        match *self {
+            EdgeCurve::Segment { a, b } => (a + (b - a) * u, (b - a).normalize_or_zero()),
+            EdgeCurve::Circle {
+                centre,
+                radius,
+                e1,
+                e2,
+            } => {
+                let (s, c) = (std::f32::consts::TAU * u).sin_cos();
+                (centre + (e1 * c + e2 * s) * radius, e2 * c - e1 * s)
+            }
+        }
+    }
+}
+
+/// A crease edge of a primitive: its curve and the two faces meeting there, each reached from the
+/// tree's root by `path` (the child taken at each CSG node on the way).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CreaseEdge {
+    /// The edge, in the tree's coordinates.
+    pub curve: EdgeCurve,
+    /// Child indices taken at the CSG nodes from the root to the primitive.
+    pub path: Vec<usize>,
+    /// The two faces meeting at the edge.
+    pub faces: [Face; 2],
+}
+
+/// A similarity `x ↦ t + s R x` accumulated from the transforms above a node, applied innermost first.
+#[derive(Clone, Debug, Default)]
+struct Placement(Vec<(glam::Vec3, glam::Vec3, f32, f32, f32)>);
+
+impl Placement {
+    fn point(&self, p: glam::Vec3) -> glam::Vec3 {
+        self.0.iter().rev().fold(p, |p, &(t, axis, c, s, scale)| {
+            t + glam::Vec3::from(transform::rotate(Vec3::<f32>::from(p), axis, c, s)) * scale
+        })
+    }
+
+    fn vector(&self, v: glam::Vec3) -> glam::Vec3 {
+        self.0.iter().rev().fold(v, |v, &(_, axis, c, s, scale)| {
+            glam::Vec3::from(transform::rotate(Vec3::<f32>::from(v), axis, c, s)) * scale
+        })
+    }
+
+    fn scale(&self) -> f32 {
+        self.0.iter().map(|&(.., scale)| scale).product()
+    }
+}
+
+impl Sdf {
+    /// The crease edges of the sharp boxes and cylinders in this tree (see the [module docs](self)), in
+    /// this node's coordinates. Empty when there are none.
+    pub fn crease_edges(&self) -> Vec<CreaseEdge> {
+        let mut out = Vec::new();
+        collect(self, &mut Vec::new(), &mut Placement::default(), &mut out);
+        out
+    }
+
+    /// The face function `F(p)` of `face` of the primitive reached by `path` (see [`CreaseEdge`]), at
+    /// `p` in this node's coordinates, generic (lifted parameters); `None` when `path` or `face` does
+    /// not name a box or cylinder face of this tree.
+    pub fn face_value<S: Scalar>(&self, path: &[usize], face: Face, p: Vec3<S>) -> Option<S> {
+        match (self, face) {
+            (Sdf::Named { child, .. }, _) => child.face_value(path, face, p),
+            (
+                Sdf::Transform {
+                    translate,
+                    axis,
+                    angle,
+                    scale,
+                    child,
+                    ..
+                },
+                _,
+            ) => {
+                let theta = angle.get::<S>() * (std::f32::consts::PI / 180.0);
+                let q =
+                    transform::rotate(p - translate.get::<S>(), *axis, theta.cos(), -theta.sin());
+                // The zero set is what matters: the child's value is not rescaled.
+                child.face_value(path, face, q * scale.get::<S>().recip())
+            }
+            (
+                Sdf::Union(children)
+                | Sdf::Intersection(children)
+                | Sdf::Difference(children)
+                | Sdf::SmoothUnion { children, .. },
+                _,
+            ) => {
+                let (&first, rest) = path.split_first()?;
+                children.get(first)?.face_value(rest, face, p)
+            }
+            (
+                Sdf::Box {
+                    center, half_size, ..
+                },
+                Face::BoxSide { axis, positive },
+            ) if path.is_empty() && axis < 3 => {
+                let d = p - center.get::<S>();
+                let h = half_size.get::<S>();
+                let (x, h) = match axis {
+                    0 => (d.x, h.x),
+                    1 => (d.y, h.y),
+                    _ => (d.z, h.z),
+                };
+                Some(if positive { x } else { -x } - h)
+            }
+            (
+                Sdf::Cylinder {
+                    center,
+                    axis,
+                    radius,
+                    half_height,
+                    ..
+                },
+                _,
+            ) if path.is_empty() => {
+                let q = p - center.get::<S>();
+                let h = q.dot_f32(*axis);
+                match face {
+                    Face::CylinderSide => {
+                        let radial =
+                            Vec3::new(q.x - h * axis.x, q.y - h * axis.y, q.z - h * axis.z);
+                        Some(radial.length() - radius.get::<S>())
+                    }
+                    Face::CylinderCap { positive } => {
+                        Some(if positive { h } else { -h } - half_height.get::<S>())
+                    }
+                    Face::BoxSide { .. } => None,
+                }
+            }
+            _ => None,
+        }
+    }
+}
+
+fn collect(node: &Sdf, path: &mut Vec<usize>, place: &mut Placement, out: &mut Vec<CreaseEdge>) {
+    match node {
+        Sdf::Named { child, .. } => collect(child, path, place, out),
+        Sdf::Transform {
+            translate,
+            axis,
+            angle,
+            scale,
+            child,
+            ..
+        } => {
+            let (s, c) = angle.value.to_radians().sin_cos();
+            place.0.push((translate.value(), *axis, c, s, scale.value));
+            collect(child, path, place, out);
+            place.0.pop();
+        }
+        Sdf::Union(children)
+        | Sdf::Intersection(children)
+        | Sdf::Difference(children)
+        | Sdf::SmoothUnion { children, .. } => {
+            for (i, c) in children.iter().enumerate() {
+                path.push(i);
+                collect(c, path, place, out);
+                path.pop();
+            }
+        }
+        Sdf::Box {
+            center,
+            half_size,
+            rounding,
+        } if rounding.value <= 0.0 => {
+            let (c, h) = (center.value(), half_size.value());
+            for k in 0..3 {
+                // The edges along axis k: the faces of the other two axes meet there.
+                let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+                for (si, sj) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                    let mut mid = c;
+                    mid[i] += si * h[i];
+                    mid[j] += sj * h[j];
+                    let mut along = glam::Vec3::ZERO;
+                    along[k] = h[k];
+                    out.push(CreaseEdge {
+                        curve: EdgeCurve::Segment {
+                            a: place.point(mid - along),
+                            b: place.point(mid + along),
+                        },
+                        path: path.clone(),
+                        faces: [
+                            Face::BoxSide {
+                                axis: i,
+                                positive: si > 0.0,
+                            },
+                            Face::BoxSide {
+                                axis: j,
+                                positive: sj > 0.0,
+                            },
+                        ],
+                    });
+                }
+            }
+        }
+        Sdf::Cylinder {
+            center,
+            axis,
+            radius,
+            half_height,
+            rounding,
+        } if rounding.value <= 0.0 => {
+            let e1 = axis.any_orthonormal_vector();
+            let e2 = axis.cross(e1);
+            for positive in [true, false] {
+                let s = if positive { 1.0 } else { -1.0 };
+                let centre = center.value() + *axis * (s * half_height.value);
+                out.push(CreaseEdge {
+                    curve: EdgeCurve::Circle {
+                        centre: place.point(centre),
+                        radius: radius.value * place.scale(),
+                        e1: place.vector(e1).normalize_or_zero(),
+                        e2: place.vector(e2).normalize_or_zero(),
+                    },
+                    path: path.clone(),
+                    faces: [Face::CylinderSide, Face::CylinderCap { positive }],
+                });
+            }
+        }
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sharp_box() -> Sdf {
+        Sdf::Box {
+            center: [0.1, -0.2, 0.3].into(),
+            half_size: [0.5, 0.7, 0.9].into(),
+            rounding: 0.0.into(),
+        }
+    }
+
+    fn transformed(child: Sdf) -> Sdf {
+        Sdf::Transform {
+            translate: [1.0, 2.0, -0.5].into(),
+            axis: glam::Vec3::new(1.0, 2.0, 3.0).normalize(),
+            angle: 37.0.into(),
+            scale: 1.7.into(),
+            trig: super::super::AngleTrig::of(37.0),
+            child: Box::new(child),
+        }
+    }
+
+    /// Every edge point lies on both faces and on the surface, whatever the transforms above it.
+    #[test]
+    fn edges_lie_on_both_faces_and_the_surface() {
+        let cylinder = Sdf::Cylinder {
+            center: [0.0, 0.5, 0.0].into(),
+            axis: glam::Vec3::new(0.3, 1.0, 0.2).normalize(),
+            radius: 0.4.into(),
+            half_height: 0.6.into(),
+            rounding: 0.0.into(),
+        };
+        for (sdf, count, total) in [
+            (sharp_box(), 12, 4.0 * 2.0 * (0.5 + 0.7 + 0.9)),
+            (
+                transformed(sharp_box()),
+                12,
+                1.7 * 4.0 * 2.0 * (0.5 + 0.7 + 0.9),
+            ),
+            (
+                transformed(Sdf::Union(vec![
+                    Sdf::sphere([5.0, 0.0, 0.0], 0.5),
+                    cylinder,
+                ])),
+                2,
+                1.7 * 2.0 * std::f32::consts::TAU * 0.4,
+            ),
+        ] {
+            let edges = sdf.crease_edges();
+            assert_eq!(edges.len(), count);
+            let length: f32 = edges.iter().map(|e| e.curve.length()).sum();
+            assert!((length - total).abs() < 1e-4 * total, "{length} vs {total}");
+            for e in &edges {
+                for u in [0.0, 0.13, 0.5, 0.97] {
+                    let (x, tangent) = e.curve.at(u);
+                    assert!(sdf.eval_f32(x).abs() < 1e-5, "φ = {}", sdf.eval_f32(x));
+                    for face in e.faces {
+                        let f: f32 = sdf.face_value(&e.path, face, Vec3::from(x)).unwrap();
+                        assert!(f.abs() < 1e-5, "{face:?}: {f}");
+                        // The tangent keeps both faces at zero (to second order on a circle).
+                        let ahead: f32 = sdf
+                            .face_value(&e.path, face, Vec3::from(x + tangent * 1e-3))
+                            .unwrap();
+                        assert!(ahead.abs() < 1e-5, "{face:?} along the tangent: {ahead}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rounded_and_smooth_primitives_have_no_edges() {
+        let rounded = Sdf::Box {
+            center: [0.0; 3].into(),
+            half_size: [1.0; 3].into(),
+            rounding: 0.1.into(),
+        };
+        assert!(rounded.crease_edges().is_empty());
+        assert!(Sdf::sphere([0.0; 3], 1.0).crease_edges().is_empty());
+        assert!(
+            sharp_box()
+                .face_value::<f32>(&[0], Face::CylinderSide, Vec3::from(glam::Vec3::ZERO))
+                .is_none()
+        );
+    }
+}
