@@ -46,7 +46,7 @@ fn main() -> implicit_psdr::Result<()> {
             sum(&d.secondary[k]),
         );
     }
-    println!("{}", d.note(&scene.creased_shapes()));
+    println!("{}", d.note(&scene.unsampled_creases()));
     let dir = Path::new("examples-out");
     std::fs::create_dir_all(dir).map_err(|e| implicit_psdr::Error::file(dir, e))?;
     let out = dir.join("derivative.exr");

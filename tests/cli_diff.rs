@@ -102,8 +102,8 @@ fn diff_note_names_creased_shapes() {
     );
     let stdout = assert_success(&out);
     assert!(
-        stdout.contains("crease edges are not sampled")
-            && stdout.contains("floor (sharp box (rounding 0))"),
+        stdout.contains("not sampled along crease curves")
+            && stdout.contains("floor (sharp box (rounding 0): the shadows of its edges)"),
         "{stdout}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -206,6 +206,61 @@ fn named_parameters_match_forward_mode_term_by_term() {
     }
 }
 
+/// The crease edges' primary term (a turned sharp box and a sharp cylinder rim, both integrators'
+/// shared code) in reverse mode equals the forward mode's contraction with the adjoint.
+#[test]
+fn crease_edges_match_forward_mode() {
+    let mut scene = scene::parse(
+        r#"{
+  "camera": {"origin": [0, 1.6, 4], "target": [0, 0, 0], "up": [0, 1, 0],
+             "fov_y": 40.0, "width": 20, "height": 20, "filter": "tent"},
+  "integrator": {"type": "direct"},
+  "shapes": [
+    {"name": "block",
+     "sdf": {"type": "transform", "translate": [-0.5, 0, 0],
+             "rotate": {"axis": [0.2, 1, 0.1], "angle": 30}, "scale": 1.0,
+             "child": {"type": "box", "center": [0, 0, 0], "half_size": [0.4, 0.5, 0.4], "rounding": 0}},
+     "bsdf": {"type": "diffuse", "albedo": [0.8, 0.6, 0.4]}},
+    {"name": "can",
+     "sdf": {"type": "cylinder", "center": [0.7, 0, 0], "axis": [0.3, 1, 0.2],
+             "radius": 0.4, "half_height": 0.5, "rounding": 0},
+     "bsdf": {"type": "diffuse", "albedo": [0.4, 0.7, 0.8]}}
+  ],
+  "emitters": [
+    {"name": "light", "type": "rectangle", "center": [2, 3, 2], "normal": [-0.5, -1, -0.5],
+     "u": [1, 0, 0], "size": [1, 1], "radiance": [20, 20, 20]},
+    {"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}
+  ]
+}"#,
+        Path::new("."),
+    )
+    .unwrap();
+    let params = names(&[
+        "block.sdf.translate.x",
+        "block.sdf.angle",
+        "can.radius",
+        "camera.origin.y",
+    ]);
+    let layout = GradientLayout::select(&mut scene, &params, &[]).unwrap();
+    let options = options(4, 7, 2, 4, Normalization::default());
+    let g = adjoint(20, 20, 5);
+    let forward = integrator::render_derivatives(&scene, params.len(), &options).unwrap();
+    let reverse = render_gradient(&scene, &layout, &g, &options).unwrap();
+    for (k, name) in params.iter().enumerate() {
+        let want = dot(&g, &forward.primary[k]);
+        let got = reverse.primary[k];
+        println!("{name} primary: forward {want:.6e} reverse {got:.6e}");
+        assert!(
+            want.abs() > 1e-3,
+            "{name}: the primary term should not vanish"
+        );
+        assert!(
+            (got - want).abs() <= 1e-4 * want.abs(),
+            "{name} primary: reverse {got} vs forward {want}"
+        );
+    }
+}
+
 #[test]
 fn grid_values_match_a_forward_direction() {
     let mut scene = small("scenes/grid.json", 24);

@@ -256,13 +256,24 @@ impl Scene {
         })
     }
 
-    /// The shapes whose surface may have crease edges, as `(shape name, reason)` ([`Sdf::creases`]): the
-    /// boundary terms do not sample crease curves, so derivatives that move them (any geometric
-    /// parameter of the scene, through the camera, the lights or the shape) miss those terms.
-    pub fn creased_shapes(&self) -> Vec<(String, String)> {
+    /// The crease edges the estimators sample ([`Sdf::crease_edges`]: sharp boxes' edges, sharp
+    /// cylinders' rims), as `(shape index, edge)` with the edge in the shape's own coordinates (add its
+    /// `translate` for world coordinates).
+    pub fn creased_shapes(&self) -> Vec<(usize, crate::sdf::CreaseEdge)> {
         self.shapes
             .iter()
-            .filter_map(|s| s.sdf.creases().map(|r| (s.name.clone(), r)))
+            .enumerate()
+            .flat_map(|(i, s)| s.sdf.crease_edges().into_iter().map(move |e| (i, e)))
+            .collect()
+    }
+
+    /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, what is
+    /// missing)` ([`Sdf::unsampled_creases`]): derivatives that move those curves (any geometric
+    /// parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    pub fn unsampled_creases(&self) -> Vec<(String, String)> {
+        self.shapes
+            .iter()
+            .filter_map(|s| s.sdf.unsampled_creases().map(|r| (s.name.clone(), r)))
             .collect()
     }
 
@@ -449,20 +460,27 @@ mod tests {
     }
 
     #[test]
-    fn creased_shapes_are_listed_with_their_reason() {
+    fn creased_shapes_list_their_edges_and_what_is_not_sampled() {
         let bsdf = Bsdf::Diffuse {
             albedo: Param3::new([0.5; 3]),
         };
         let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf));
         assert!(scene.creased_shapes().is_empty());
+        assert!(scene.unsampled_creases().is_empty());
         scene.shapes.push(Shape::new(
             "crate",
             Sdf::cuboid([2.0, 0.0, 0.0], [0.5; 3], 0.0),
             bsdf,
         ));
+        let edges = scene.creased_shapes();
+        assert_eq!(edges.len(), 12);
+        assert!(edges.iter().all(|(i, _)| *i == 1));
         assert_eq!(
-            scene.creased_shapes(),
-            vec![("crate".to_string(), "sharp box (rounding 0)".to_string())]
+            scene.unsampled_creases(),
+            vec![(
+                "crate".to_string(),
+                "sharp box (rounding 0): the shadows of its edges".to_string()
+            )]
         );
     }
 

@@ -33,40 +33,57 @@ impl Sdf {
     /// reported). Transforms, names (prefixed `"name: "`) and smooth unions keep their children's
     /// creases.
     pub fn creases(&self) -> Option<String> {
+        self.crease_reasons(false)
+    }
+
+    /// The crease curves of this node whose boundary terms the estimators do not sample, with what is
+    /// missing: the shadows of sharp boxes' edges and sharp cylinders' rims (their primary term is
+    /// sampled, [`Sdf::crease_edges`]), and every crease of hard CSG. `None` when nothing is missing.
+    /// Reasons are worded as [`Sdf::creases`]'s, joined by `"; "`.
+    pub fn unsampled_creases(&self) -> Option<String> {
+        self.crease_reasons(true)
+    }
+
+    fn crease_reasons(&self, unsampled: bool) -> Option<String> {
         let mut reasons = Vec::new();
-        self.collect_creases(&mut reasons);
+        self.collect_creases(unsampled, &mut reasons);
         reasons.dedup();
         (!reasons.is_empty()).then(|| reasons.join("; "))
     }
 
-    fn collect_creases(&self, out: &mut Vec<String>) {
+    /// Pushes this node's crease reasons; with `unsampled`, worded as what the estimators miss.
+    fn collect_creases(&self, unsampled: bool, out: &mut Vec<String>) {
         let mut push = |s: String| {
             if !out.contains(&s) {
                 out.push(s);
             }
         };
         match self {
-            Sdf::Box { rounding, .. } if rounding.value <= 0.0 => {
-                push("sharp box (rounding 0)".into());
-            }
-            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 => {
-                push("cylinder with sharp rims (rounding 0)".into());
-            }
-            Sdf::Union(children) => hard_csg(children, "union", out),
-            Sdf::Intersection(children) => hard_csg(children, "intersection", out),
-            Sdf::Difference(children) => hard_csg(children, "difference", out),
+            Sdf::Box { rounding, .. } if rounding.value <= 0.0 => push(if unsampled {
+                "sharp box (rounding 0): the shadows of its edges".into()
+            } else {
+                "sharp box (rounding 0)".into()
+            }),
+            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 => push(if unsampled {
+                "cylinder with sharp rims (rounding 0): the shadows of its rims".into()
+            } else {
+                "cylinder with sharp rims (rounding 0)".into()
+            }),
+            Sdf::Union(children) => hard_csg(children, "union", unsampled, out),
+            Sdf::Intersection(children) => hard_csg(children, "intersection", unsampled, out),
+            Sdf::Difference(children) => hard_csg(children, "difference", unsampled, out),
             Sdf::SmoothUnion { children, k } if k.value <= 0.0 => {
-                hard_csg(children, "smooth union with k = 0, i.e.", out);
+                hard_csg(children, "smooth union with k = 0, i.e.", unsampled, out);
             }
             Sdf::SmoothUnion { children, .. } => {
                 for c in children {
-                    c.collect_creases(out);
+                    c.collect_creases(unsampled, out);
                 }
             }
-            Sdf::Transform { child, .. } => child.collect_creases(out),
+            Sdf::Transform { child, .. } => child.collect_creases(unsampled, out),
             Sdf::Named { name, child } => {
                 let mut inner = Vec::new();
-                child.collect_creases(&mut inner);
+                child.collect_creases(unsampled, &mut inner);
                 for r in inner {
                     let r = format!("{name}: {r}");
                     if !out.contains(&r) {
@@ -80,9 +97,9 @@ impl Sdf {
 }
 
 /// The children's own creases, then one reason for the node if two children's surfaces may cross.
-fn hard_csg(children: &[Sdf], op: &str, out: &mut Vec<String>) {
+fn hard_csg(children: &[Sdf], op: &str, unsampled: bool, out: &mut Vec<String>) {
     for c in children {
-        c.collect_creases(out);
+        c.collect_creases(unsampled, out);
     }
     let crossing = (0..children.len())
         .any(|i| (i + 1..children.len()).any(|j| surfaces_may_meet(&children[i], &children[j])));

@@ -278,7 +278,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         ("the gradient holds", "the gradient"),
         primary > 0,
         secondary > 0,
-        &scene.creased_shapes(),
+        &scene.unsampled_creases(),
     );
     println!("note: {note}");
 

@@ -237,7 +237,7 @@ fn diff(args: &DiffArgs) -> Result<()> {
     let count = names.len();
     let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;
     let image = &result.image;
-    println!("note: {}", result.note(&scene.creased_shapes()));
+    println!("note: {}", result.note(&scene.unsampled_creases()));
     let channels = result.channels(&names, args.terms);
     write_derivatives(&paths, image, &channels, &names, &result.total())?;
     println!(

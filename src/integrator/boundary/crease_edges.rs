@@ -100,7 +100,8 @@ pub struct EdgePoint {
     pub edge: usize,
 }
 
-/// The crease edges of the scene's shapes that may project onto the film, for sampling by length.
+/// Crease edges of the scene's shapes (those that may project onto the film, or all), for sampling by
+/// length.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CreaseEdges {
     /// Every shape's edges, in the shape's own coordinates (`(shape, edge)`).
@@ -111,46 +112,54 @@ pub struct CreaseEdges {
 }
 
 impl CreaseEdges {
-    /// The crease edges of `scene`'s shapes ([`crate::sdf::Sdf::crease_edges`]) in view from its camera.
+    /// The crease edges of `scene`'s shapes ([`Scene::creased_shapes`]) in view from its camera.
     pub fn seen_from(scene: &Scene) -> Self {
-        let frustum = Frustum::of(scene);
+        Self::collect(scene, Some(&Frustum::of(scene)))
+    }
+
+    /// Every crease edge of `scene`'s shapes, whole (the shadow term's: an edge out of view can cast a
+    /// shadow in view).
+    pub fn all(scene: &Scene) -> Self {
+        Self::collect(scene, None)
+    }
+
+    /// The edges, clipped to `frustum` if given.
+    fn collect(scene: &Scene, frustum: Option<&Frustum>) -> Self {
         let mut edges = Vec::new();
         let mut pieces = Vec::new();
-        for (i, shape) in scene.shapes.iter().enumerate() {
-            let t = shape.translate.value();
-            for e in shape.sdf.crease_edges() {
-                let curve = match e.curve {
-                    EdgeCurve::Segment { a, b } => match frustum.clip(a + t, b + t) {
-                        Some((a, b)) => EdgeCurve::Segment { a, b },
-                        None => continue,
-                    },
+        for (i, e) in scene.creased_shapes() {
+            let t = scene.shapes[i].translate.value();
+            let curve = match e.curve {
+                EdgeCurve::Segment { a, b } => match frustum {
+                    Some(f) => f.clip(a + t, b + t),
+                    None => Some((a + t, b + t)),
+                }
+                .map(|(a, b)| EdgeCurve::Segment { a, b }),
+                EdgeCurve::Circle {
+                    centre,
+                    radius,
+                    e1,
+                    e2,
+                } => (!frustum.is_some_and(|f| f.misses_ball(centre + t, radius))).then_some(
                     EdgeCurve::Circle {
-                        centre,
+                        centre: centre + t,
                         radius,
                         e1,
                         e2,
-                    } => {
-                        if frustum.misses_ball(centre + t, radius) {
-                            continue;
-                        }
-                        EdgeCurve::Circle {
-                            centre: centre + t,
-                            radius,
-                            e1,
-                            e2,
-                        }
-                    }
-                };
-                let length = curve.length();
-                if length > 0.0 && length.is_finite() {
-                    pieces.push(Piece {
-                        shape: i,
-                        edge: edges.len(),
-                        curve,
-                    });
-                }
-                edges.push((i, e));
+                    },
+                ),
+            };
+            if let Some(curve) = curve
+                && curve.length() > 0.0
+                && curve.length().is_finite()
+            {
+                pieces.push(Piece {
+                    shape: i,
+                    edge: edges.len(),
+                    curve,
+                });
             }
+            edges.push((i, e));
         }
         let mut total = 0.0;
         let cumulative = pieces
@@ -205,7 +214,12 @@ impl CreaseEdges {
 }
 
 /// `∇F` of a face function of `edge` on `shape` at the world point `x` (f32, by forward-mode AD).
-fn face_gradient(shape: &Shape, edge: &CreaseEdge, face: usize, x: glam::Vec3) -> glam::Vec3 {
+pub(crate) fn face_gradient(
+    shape: &Shape,
+    edge: &CreaseEdge,
+    face: usize,
+    x: glam::Vec3,
+) -> glam::Vec3 {
     let p = x - shape.translate.value();
     let p = Vec3::new(
         DualVec3::from_re(p.x).derivative(0),

@@ -11,6 +11,8 @@
 //! (`direct` is `path` with one scattering vertex).
 
 pub mod crease_edges;
+pub mod crease_segment;
+pub mod crease_shadows;
 pub mod emitter_edges;
 mod frustum;
 pub mod primary;
@@ -68,6 +70,19 @@ where
         }
         stats.exhausted_rays += counters.exhausted;
     })
+}
+
+/// Shares `samples` equally between the `kinds` that are present (the first ones get the remainder);
+/// absent kinds, and kinds left with no sample, get no entry.
+pub(crate) fn split_equally<K: Copy>(samples: u64, kinds: &[(K, bool)]) -> Vec<(K, u64)> {
+    let present: Vec<K> = kinds.iter().filter(|k| k.1).map(|k| k.0).collect();
+    let n = present.len() as u64;
+    present
+        .into_iter()
+        .enumerate()
+        .map(|(i, kind)| (kind, samples / n + u64::from((i as u64) < samples % n)))
+        .filter(|&(_, k)| k > 0)
+        .collect()
 }
 
 /// Forward mode: runs `run` (an estimator's [`run_samples`]) on a [`SplatFilm`] of directions

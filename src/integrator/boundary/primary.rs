@@ -96,17 +96,18 @@
 //! later segments are the secondary term's.
 //!
 //! **Scope.** Both integrators; shapes with finite bounds and curved surfaces (planes and sharp boxes
-//! have no smooth silhouettes), and the outlines of finite emitters seen directly
-//! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes; they take half of the samples when
-//! both kinds are in view). Not included: crease edges (listed by
-//! [`crate::scene::Scene::creased_shapes`]), the film edges.
+//! have no smooth silhouettes), the outlines of finite emitters seen directly
+//! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes) and the crease edges of sharp boxes
+//! and cylinders ([`super::crease_edges`]); the kinds in view share the samples equally
+//! ([`PrimarySources::split`]). Not included: the creases of hard CSG (listed by
+//! [`crate::scene::Scene::unsampled_creases`]), the film edges.
 
 use super::crease_edges::{CreaseEdges, run_creases};
 use super::emitter_edges::{EmitterOutlines, run_outlines};
 use super::segment::is_silhouette_direction;
 use super::{
     accumulate_samples, attached_first_vertex, background_offset, background_radiance,
-    finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
+    finite_splat, on_film, projection_jacobian, run_samples, splat_on_film, split_equally,
 };
 use crate::error::Result;
 use crate::film::{Film, Image, Normalization, SampleSink};
@@ -266,21 +267,14 @@ impl PrimarySources {
     /// How `samples` primary samples are shared: equally between the kinds that have curves in view
     /// (the first ones get the remainder); kinds with none get no entry.
     pub fn split(&self, samples: u64) -> Vec<(PrimarySource, u64)> {
-        let kinds: Vec<PrimarySource> = [
-            (PrimarySource::Silhouettes, !self.curves.is_empty()),
-            (PrimarySource::EmitterOutlines, !self.outlines.is_empty()),
-            (PrimarySource::CreaseEdges, !self.creases.is_empty()),
-        ]
-        .into_iter()
-        .filter_map(|(kind, present)| present.then_some(kind))
-        .collect();
-        let n = kinds.len() as u64;
-        kinds
-            .into_iter()
-            .enumerate()
-            .map(|(i, kind)| (kind, samples / n + u64::from((i as u64) < samples % n)))
-            .filter(|&(_, k)| k > 0)
-            .collect()
+        split_equally(
+            samples,
+            &[
+                (PrimarySource::Silhouettes, !self.curves.is_empty()),
+                (PrimarySource::EmitterOutlines, !self.outlines.is_empty()),
+                (PrimarySource::CreaseEdges, !self.creases.is_empty()),
+            ],
+        )
     }
 
     /// `samples` samples of one kind into any film (their shares not yet divided by `samples`); the

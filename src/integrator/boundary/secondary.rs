@@ -118,10 +118,12 @@
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
 //! crease edges.
 
+use super::crease_segment::CreaseSegment;
+use super::crease_shadows::run_crease_shadows;
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{accumulate_samples, finite_splat, run_samples, splat_on_film};
+use super::{accumulate_samples, finite_splat, run_samples, splat_on_film, split_equally};
 use crate::error::Result;
 use crate::film::{Film, Image, SampleSink};
 use crate::integrator::attach::SceneAttach;
@@ -133,8 +135,9 @@ use crate::integrator::shading::geometry_term;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
-use crate::scalar::{Directions, dispatch_directions};
-use crate::scene::{Intersection, Scene, Surface};
+use crate::scalar::{Directions, Scalar, dispatch_directions};
+use crate::scene::{Intersection, Scene, Shape, Surface};
+use crate::sdf::CreaseEdge;
 
 /// The random stream of boundary samples (distinct from the camera's
 /// [`crate::integrator::CAMERA_STREAM`]).
@@ -223,19 +226,82 @@ fn pass<S: Directions>(
 ) -> (Vec<Image>, RenderStats) {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mut images = vec![Image::new(w, h); width];
-    let stats = accumulate_samples::<S>(
-        scene,
-        width,
-        samples,
-        |film| run_segments::<S, _>(scene, seed, samples, tangent, progress, film),
-        &mut images,
-        &mut [],
-    );
+    let mut stats = RenderStats::default();
+    for (source, n) in split(scene, samples) {
+        stats.absorb(accumulate_samples::<S>(
+            scene,
+            width,
+            n,
+            |film| run_source::<S, _>(scene, source, seed, n, tangent, progress, film),
+            &mut images,
+            &mut [],
+        ));
+    }
     (images, stats)
 }
 
+/// One kind of occluder the secondary term samples.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum SecondarySource {
+    /// Smooth silhouettes of curved shapes (tangent lines, this module).
+    Silhouettes,
+    /// Crease edges of sharp boxes and cylinders ([`super::crease_shadows`]).
+    CreaseEdges,
+}
+
+/// How `samples` secondary samples are shared: equally between the kinds of occluder the scene has.
+pub fn split(scene: &Scene, samples: u64) -> Vec<(SecondarySource, u64)> {
+    split_equally(
+        samples,
+        &[
+            (
+                SecondarySource::Silhouettes,
+                !curved_shapes(scene).is_empty(),
+            ),
+            (
+                SecondarySource::CreaseEdges,
+                !scene.creased_shapes().is_empty(),
+            ),
+        ],
+    )
+}
+
+/// `samples` samples of one kind into any film (their shares not yet divided by `samples`).
+pub(crate) fn run_source<S: Directions, F: Film>(
+    scene: &Scene,
+    source: SecondarySource,
+    seed: u64,
+    samples: u64,
+    tangent: TangentSampling,
+    progress: &Progress,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    match source {
+        SecondarySource::Silhouettes => {
+            run_segments::<S, F>(scene, seed, samples, tangent, progress, film)
+        }
+        SecondarySource::CreaseEdges => {
+            run_crease_shadows::<S, F>(scene, seed, samples, progress, film)
+        }
+    }
+}
+
+/// The curved shapes with finite bounds: the ones [`sample_surface`] can sample and whose tangent
+/// lines can be silhouettes (flat shapes have no silhouette directions, `κ_n = 0`).
+fn curved_shapes(scene: &Scene) -> Vec<usize> {
+    (0..scene.shapes.len())
+        .filter(|&i| {
+            let b = scene.shapes[i].bounds;
+            b.is_finite() && !b.is_empty() && !scene.shapes[i].sdf.is_piecewise_flat()
+        })
+        .collect()
+}
+
 /// The boundary samples `0..samples` into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_segments<S: Directions, F: Film>(
+fn run_segments<S: Directions, F: Film>(
     scene: &Scene,
     seed: u64,
     samples: u64,
@@ -246,22 +312,10 @@ pub(crate) fn run_segments<S: Directions, F: Film>(
 where
     F::Tile: SampleSink<S>,
 {
-    let candidates: Vec<usize> = (0..scene.shapes.len())
-        .filter(|&i| {
-            // Flat shapes have no silhouette directions (κ_n = 0): sampling them would waste samples.
-            let b = scene.shapes[i].bounds;
-            b.is_finite() && !b.is_empty() && !scene.shapes[i].sdf.is_piecewise_flat()
-        })
-        .collect();
-    if candidates.is_empty() {
+    let ctx = Context::new(scene, tangent);
+    if ctx.candidates.is_empty() {
         return RenderStats::default();
     }
-    let ctx = Context {
-        scene,
-        attach: SceneAttach::new(scene),
-        candidates,
-        tangent: TangentSampler::new(scene, tangent),
-    };
     run_samples::<S, F, _>(
         film,
         samples,
@@ -275,14 +329,84 @@ where
 }
 
 /// What every boundary sample needs.
-struct Context<'a> {
-    scene: &'a Scene,
+pub(crate) struct Context<'a> {
+    pub(crate) scene: &'a Scene,
     attach: SceneAttach<'a>,
     /// Curved shapes with finite bounds (the ones [`sample_surface`] can sample and whose tangent lines
     /// can be silhouettes), chosen uniformly.
     candidates: Vec<usize>,
     /// Draws `θ_B` (towards the emitters).
     tangent: TangentSampler,
+}
+
+/// What blocks a boundary segment at `x_B`.
+#[derive(Copy, Clone, Debug)]
+pub(crate) enum Occluder<'a> {
+    /// A smooth silhouette of shape `m`: the line is tangent there ([`BoundarySegment`]).
+    Silhouette(usize),
+    /// A crease edge of shape `m` (the edge in the shape's coordinates, its unit tangent at `x_B`):
+    /// the line passes the edge ([`CreaseSegment`]).
+    Crease(usize, &'a CreaseEdge, glam::Vec3),
+}
+
+/// A boundary segment's geometry, with what its velocity is evaluated on.
+enum Blocked<'a> {
+    Silhouette(&'a Shape, BoundarySegment),
+    Crease(&'a Shape, &'a CreaseEdge, CreaseSegment),
+}
+
+impl<'a> Occluder<'a> {
+    /// The segment `x_s → x_d` past `x_b` (normals `n_s`, `n_d`); `None` for coincident points or a
+    /// vanishing gradient.
+    fn segment(
+        self,
+        scene: &'a Scene,
+        x_s: glam::Vec3,
+        x_b: glam::Vec3,
+        x_d: glam::Vec3,
+        n_s: glam::Vec3,
+        n_d: glam::Vec3,
+    ) -> Option<Blocked<'a>> {
+        Some(match self {
+            Occluder::Silhouette(m) => {
+                let shape = &scene.shapes[m];
+                let seg = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d)?;
+                Blocked::Silhouette(shape, seg)
+            }
+            Occluder::Crease(m, edge, tangent) => {
+                let shape = &scene.shapes[m];
+                let seg = CreaseSegment::new(shape, edge, x_s, x_b, x_d, n_s, n_d, tangent)?;
+                Blocked::Crease(shape, edge, seg)
+            }
+        })
+    }
+}
+
+impl Blocked<'_> {
+    /// `dA(x_S) dℓ(x_D)` per unit of the sampled measure (eq. (A) of [`super::segment`], (B2) of
+    /// [`super::crease_segment`]).
+    fn jacobian(&self) -> f32 {
+        match self {
+            Blocked::Silhouette(_, seg) => seg.jacobian(),
+            Blocked::Crease(_, _, seg) => seg.jacobian(),
+        }
+    }
+
+    /// The same with `x_D` at infinity.
+    fn jacobian_directional(&self) -> f32 {
+        match self {
+            Blocked::Silhouette(_, seg) => seg.jacobian_directional(),
+            Blocked::Crease(_, _, seg) => seg.jacobian_directional(),
+        }
+    }
+
+    /// `V_∂` by AD with the attached ends.
+    fn velocity<S: Scalar>(&self, x_s: Vec3<S>, x_d: Vec3<S>) -> S {
+        match self {
+            Blocked::Silhouette(shape, seg) => boundary_velocity(shape, seg, x_s, x_d),
+            Blocked::Crease(shape, edge, seg) => seg.velocity(shape, edge, x_s, x_d),
+        }
+    }
 }
 
 /// The end `x_D` of a segment.
@@ -304,6 +428,19 @@ fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
             ^ (p.z.to_bits() as u64).rotate_left(17)
     };
     Sampler::new(bits(x_b), SUBPATH_STREAM, bits(x_s), 0)
+}
+
+impl<'a> Context<'a> {
+    /// The context of `scene`'s boundary samples, `θ_B` drawn by `tangent`.
+    pub(crate) fn new(scene: &'a Scene, tangent: TangentSampling) -> Self {
+        let candidates = curved_shapes(scene);
+        Self {
+            scene,
+            attach: SceneAttach::new(scene),
+            candidates,
+            tangent: TangentSampler::new(scene, tangent),
+        }
+    }
 }
 
 impl Context<'_> {
@@ -358,19 +495,21 @@ impl Context<'_> {
                     end => end,
                 });
             for (s_end, d_end) in [(&ends[1], &ends[0]), (&ends[0], &ends[1])] {
-                self.segment(m, hit.p, s_end, d_end, weight, splats, counters);
+                let occluder = Occluder::Silhouette(m);
+                self.segment(occluder, (hit.p, o), s_end, d_end, weight, splats, counters);
             }
         }
     }
 
-    /// The segment from the hit `s_end` through `x_b` (on shape `m`) to `d_end`, if it is a
+    /// The segment from the hit `s_end` past `x_b` (where `occluder` blocks it) to `d_end`, if it is a
     /// visibility boundary of some camera path: pushes its contributions (eq. (2), with the camera and
     /// light sides of [`super::subpaths`] for integrators with several scattering vertices).
+    /// `line_origin` is `x_b` pushed off the occluder, where the line was traced from.
     #[allow(clippy::too_many_arguments)]
-    fn segment<S: Directions>(
+    pub(crate) fn segment<S: Directions>(
         &self,
-        m: usize,
-        x_b: glam::Vec3,
+        occluder: Occluder,
+        (x_b, line_origin): (glam::Vec3, glam::Vec3),
         s_end: &Intersection,
         d_end: &Intersection,
         weight: f32,
@@ -428,29 +567,28 @@ impl Context<'_> {
         if cams.is_empty() {
             return;
         }
-        let shape = &scene.shapes[m];
         let xs_s = self.attach.shape_vertex::<S>(si, x_s, n_s).x;
         // Per depth k the radiance arriving at x_S (times G or |cos| at infinity), the measure change J
         // and V_∂ in S.
         let mut radiance = Vec::new();
         let (jac, v) = match end {
             End::Emitter(e, x_d, n_d) => {
-                let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d) else {
+                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, n_d) else {
                     return;
                 };
-                let w = seg.omega();
+                let w = (x_b - x_s).normalize_or_zero();
                 let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
                 let le =
                     scene.emitters[e]
                         .emitter
                         .emitted::<f32>(x_d.into(), n_d.into(), (-w).into());
                 let xd_s = self.attach.emitter_vertex::<S>(e, x_d, n_d).x;
-                let v = boundary_velocity(shape, &seg, xs_s, xd_s);
+                let v = seg.velocity(xs_s, xd_s);
                 radiance.push((le.primal(), g));
                 (seg.jacobian(), v)
             }
             End::Shape(d, x_d, n_d) => {
-                let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d) else {
+                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, n_d) else {
                     return;
                 };
                 let jac = seg.jacobian();
@@ -461,7 +599,7 @@ impl Context<'_> {
                 // The segment's own line (x_S and x_D lie on it; x_B is pushed off M like the traced
                 // line), continued from its first hit x_D.
                 let kmin = cams.iter().map(|c| c.depth).min().unwrap_or(1);
-                let o = scene.offset_origin(m, x_b, seg.n_b, seg.n_b);
+                let o = line_origin;
                 let Some(w) = (x_d - x_s).try_normalize() else {
                     return;
                 };
@@ -486,21 +624,21 @@ impl Context<'_> {
                     radiance.push((l.unwrap_or(glam::Vec3::ZERO), g));
                 }
                 let xd_s = self.attach.shape_vertex::<S>(d, x_d, n_d).x;
-                (jac, boundary_velocity(shape, &seg, xs_s, xd_s))
+                (jac, seg.velocity(xs_s, xd_s))
             }
             End::Environment(e) => {
                 // A stand-in x_D on the plane perpendicular to ω at a distance well beyond x_B.
                 let w = (x_b - x_s).normalize_or_zero();
                 let d = 1e3 * x_s.distance(x_b).max(1.0);
                 let x_d = x_s + w * d;
-                let Some(seg) = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, -w) else {
+                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, -w) else {
                     return;
                 };
                 let le =
                     scene.emitters[e]
                         .emitter
                         .emitted::<f32>(x_d.into(), (-w).into(), (-w).into());
-                let v = boundary_velocity(shape, &seg, xs_s, Vec3::constant(x_d)) / d;
+                let v = seg.velocity(xs_s, Vec3::constant(x_d)) / d;
                 radiance.push((le.primal(), n_s.dot(w).abs()));
                 (seg.jacobian_directional(), v)
             }

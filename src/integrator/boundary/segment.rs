@@ -323,14 +323,14 @@ pub fn boundary_velocity<S: Scalar>(
 /// Sine of the angle between the line direction `w` and the section of a surface (unit normal `n`) by
 /// the plane spanned by `w` and `v` (unit, `v ⊥ w`): `|n·w| / √((n·w)² + (n·v)²)`. 0 when the plane is
 /// the surface's tangent plane (no section direction).
-fn sin_to_section(n: glam::Vec3, w: glam::Vec3, v: glam::Vec3) -> f32 {
+pub(crate) fn sin_to_section(n: glam::Vec3, w: glam::Vec3, v: glam::Vec3) -> f32 {
     let (a, b) = (n.dot(w), n.dot(v));
     let r = a.hypot(b);
     if r > 0.0 { a.abs() / r } else { 0.0 }
 }
 
 /// `num / den`, or 0 when `den` is 0 or the result is not finite (a measure-zero configuration).
-fn guarded_ratio(num: f32, den: f32) -> f32 {
+pub(crate) fn guarded_ratio(num: f32, den: f32) -> f32 {
     if den == 0.0 {
         return 0.0;
     }

@@ -138,7 +138,7 @@ impl DerivativeImages {
     }
 
     /// A one-line note for the user: which terms the derivative holds, and the shapes with crease
-    /// edges (`(name, reason)`, [`Scene::creased_shapes`]) whose boundary terms are not sampled.
+    /// curves whose boundary terms are not sampled (`(name, what)`, [`Scene::unsampled_creases`]).
     pub fn note(&self, creased: &[(String, String)]) -> String {
         terms_note(
             ("derivatives hold", "d.P"),
@@ -150,7 +150,7 @@ impl DerivativeImages {
 }
 
 /// The one-line note of a derivative or gradient: which terms it holds (`primary`, `secondary`: whether
-/// those terms were computed) and the shapes with crease edges whose boundary terms are not sampled.
+/// those terms were computed) and the shapes with crease curves whose boundary terms are not sampled.
 /// `(holds, result)` words the subject: `("derivatives hold", "d.P")`, `("the gradient holds", "the
 /// gradient")`.
 pub fn terms_note(
@@ -184,8 +184,8 @@ pub fn terms_note(
     if !creased.is_empty() {
         let list: Vec<String> = creased.iter().map(|(n, r)| format!("{n} ({r})")).collect();
         note += &format!(
-            "; crease edges are not sampled, so where they move or hide what moves {result} misses \
-             their boundary terms: {}",
+            "; not sampled along crease curves, so where they move or hide what moves {result} \
+             misses those boundary terms: {}",
             list.join(", ")
         );
     }

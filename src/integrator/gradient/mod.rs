@@ -25,7 +25,7 @@ pub use loss::Loss;
 use crate::error::{Error, Result};
 use crate::film::{AdjointFilm, Image, Normalization};
 use crate::integrator::boundary::primary::PrimarySources;
-use crate::integrator::boundary::secondary::run_segments;
+use crate::integrator::boundary::secondary;
 use crate::integrator::boundary::tangent_sampling::TangentSampling;
 use crate::integrator::diff::interior;
 use crate::integrator::driver::RenderStats;
@@ -203,19 +203,20 @@ pub fn render_gradient_with_image(
     }
     lap(1);
     let mut secondary = vec![0.0; n];
-    if n_secondary > 0 {
-        let mut f = film(1.0 / n_secondary as f32);
-        let s = run_segments::<Rev, _>(
+    for (source, samples) in secondary::split(scene, n_secondary) {
+        let mut f = film(1.0 / samples as f32);
+        let s = secondary::run_source::<Rev, _>(
             scene,
+            source,
             render_options.seed,
-            n_secondary,
+            samples,
             TangentSampling::Steered,
             &render_options.progress,
             &mut f,
         );
         stats.absorb(s);
         invalid += f.invalid;
-        secondary = f.gradient;
+        add(&mut secondary, &f.gradient);
     }
     lap(2);
     stats.invalid_derivatives += invalid;

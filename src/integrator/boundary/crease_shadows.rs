@@ -1,0 +1,166 @@
+//! The secondary boundary term along crease edges (docs/theory.md §7.3): the shadows of sharp boxes'
+//! edges and sharp cylinders' rims, and every other visibility change along a path where a segment
+//! passes such an edge. The estimator is [`super::secondary`]'s (read its module docs first) with the
+//! tangent line replaced by a line through an edge point ([`super::crease_segment`]).
+//!
+//! # Sampling
+//!
+//! One sample draws a point `x_B` uniformly on the total length `Λ` of the scene's crease edges
+//! ([`CreaseEdges::all`]: an edge out of view can cast a shadow in view), and a direction `ω` by
+//! one-sample MIS over solid angle (Veach 1997, §9.2.4): uniform on the sphere with probability
+//! [`UNIFORM_SHARE`], else towards a point of an emitter chosen uniformly
+//! ([`crate::emitter::Emitter::sample_li`]), weighted by the mixture density
+//!
+//! ```text
+//!   p(ω) = P_u / 4π + (1 − P_u) Σ_e p_e(ω) / n_e                                                  (1)
+//! ```
+//!
+//! (`p_e` the emitter's density per steradian from `x_B`, zero where `ω` misses it; `n_e` the number of
+//! emitters). `P_u > 0` keeps `p` positive everywhere, so segments ending on shapes (continued by the
+//! `path` integrator) or on occluded emitters keep their share. The line through `x_B` along `ω` is
+//! traced both ways from `x_B` pushed off the edge along its faces' mean normal; its first hits are
+//! `x_D` (along `ω`) and `x_S` (along `−ω`): one oriented segment per sample, whose direction is `ω`.
+//! Unless the faces lie on opposite sides of the line ([`CreaseSegment::is_boundary`]) the sample
+//! contributes nothing. It contributes eq. (2) of [`super::secondary`] with the crease's change of
+//! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an
+//! edge that are not on the shape's surface (inside another CSG child, or cut away) contribute 0.
+
+use super::crease_edges::{CreaseEdges, face_gradient};
+use super::run_samples;
+use super::secondary::{Context, Occluder};
+use super::tangent_sampling::TangentSampling;
+use crate::film::{Film, SampleSink};
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::Progress;
+use crate::integrator::path::TraceCounters;
+use crate::math::Ray;
+use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
+use crate::sampler::Sampler;
+use crate::scalar::Directions;
+use crate::scene::{Intersection, Scene};
+
+/// The random stream of crease-shadow samples.
+pub const CREASE_SHADOW_STREAM: u64 = 0x5ADE_C2EA;
+
+/// The probability `P_u` of drawing the direction uniformly on the sphere (eq. (1)).
+pub const UNIFORM_SHARE: f32 = 0.5;
+
+/// The density (1) of direction `w` from `x`: uniform share plus the emitters' solid-angle densities.
+fn direction_pdf(scene: &Scene, x: glam::Vec3, w: glam::Vec3) -> f32 {
+    let n = scene.emitters.len();
+    if n == 0 {
+        return UNIFORM_SPHERE_PDF;
+    }
+    let ray = Ray::new(x, w);
+    let towards: f32 = scene
+        .emitters
+        .iter()
+        .map(|e| {
+            let e = &e.emitter;
+            if e.is_infinite() {
+                e.pdf_li(x, w, x + w, -w)
+            } else {
+                e.intersect(&ray, f32::INFINITY)
+                    .map_or(0.0, |(t, normal)| e.pdf_li(x, w, ray.at(t), normal))
+            }
+        })
+        .filter(|p| p.is_finite())
+        .sum();
+    UNIFORM_SHARE * UNIFORM_SPHERE_PDF + (1.0 - UNIFORM_SHARE) * towards / n as f32
+}
+
+/// A direction from `x` drawn by (1), with its density; `None` when the emitter sample fails.
+fn sample_direction(
+    scene: &Scene,
+    x: glam::Vec3,
+    sampler: &mut Sampler,
+) -> Option<(glam::Vec3, f32)> {
+    let n = scene.emitters.len();
+    let pick = sampler.next_1d();
+    let u = sampler.next_2d();
+    let w = if n == 0 || pick < UNIFORM_SHARE {
+        uniform_sphere(u)
+    } else {
+        let k = (((pick - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE) * n as f32) as usize).min(n - 1);
+        scene.emitters[k].emitter.sample_li(x, u)?.wi
+    };
+    let pdf = direction_pdf(scene, x, w);
+    (pdf > 0.0 && pdf.is_finite()).then_some((w, pdf))
+}
+
+/// The crease-shadow samples `0..samples` into any film (their shares not yet divided by `samples`).
+pub(crate) fn run_crease_shadows<S: Directions, F: Film>(
+    scene: &Scene,
+    seed: u64,
+    samples: u64,
+    progress: &Progress,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    let edges = CreaseEdges::all(scene);
+    if edges.is_empty() {
+        return RenderStats::default();
+    }
+    let ctx = Context::new(scene, TangentSampling::Steered);
+    run_samples::<S, F, _>(
+        film,
+        samples,
+        ("secondary (crease edges)", progress),
+        || (),
+        |_, counters, k, splats| {
+            let mut sampler = Sampler::new(seed, CREASE_SHADOW_STREAM, 0, k);
+            sample(&ctx, &edges, &mut sampler, splats, counters);
+        },
+    )
+}
+
+/// One sample (module docs): pushes its contributions, not yet divided by the sample count.
+fn sample<S: Directions>(
+    ctx: &Context,
+    edges: &CreaseEdges,
+    sampler: &mut Sampler,
+    splats: &mut impl SampleSink<S>,
+    counters: &mut TraceCounters,
+) {
+    let scene = ctx.scene;
+    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
+    let Some(pt) = edges.sample([u0, u1]) else {
+        return;
+    };
+    let (m, edge) = edges.edge(pt.edge);
+    let shape = &scene.shapes[*m];
+    let x_b = pt.x;
+    if !(shape.eval_f32(x_b).abs() <= scene.trace.eps_at_point(x_b)) {
+        return;
+    }
+    let Some((w, pdf)) = sample_direction(scene, x_b, sampler) else {
+        return;
+    };
+    let grads = [0, 1].map(|f| face_gradient(shape, edge, f, x_b));
+    let side = grads[0].dot(w) * grads[1].dot(w);
+    if !(side < 0.0) {
+        return;
+    }
+    let weight = edges.total_length() / pdf;
+    if !weight.is_finite() {
+        return;
+    }
+    let Some(mean_normal) =
+        (grads[0].normalize_or_zero() + grads[1].normalize_or_zero()).try_normalize()
+    else {
+        return;
+    };
+    let o = scene.offset_origin(*m, x_b, mean_normal, mean_normal);
+    // Exhausted traces count as misses, as in the integrator's own paths (see `secondary`).
+    let [d_end, s_end] = [w, -w].map(|d| match scene.intersect(&Ray::new(o, d), f32::INFINITY) {
+        Intersection::Exhausted => {
+            counters.exhausted += 1;
+            Intersection::Miss
+        }
+        end => end,
+    });
+    let occluder = Occluder::Crease(*m, edge, pt.tangent);
+    ctx.segment(occluder, (x_b, o), &s_end, &d_end, weight, splats, counters);
+}
