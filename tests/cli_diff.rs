@@ -90,20 +90,46 @@ fn params_lists_the_default_scene() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A sharp floor's edges are sampled in full with `direct` (no note); with `path` the note names what is
+/// missing (its edges for paths that reach it after a bounce), and a hard CSG crease always.
 #[test]
 fn diff_note_names_creased_shapes() {
     let dir = workdir("diff-crease");
+    let args = [
+        "diff",
+        "scene.json",
+        "--param",
+        "ball.translate.x",
+        "--spp",
+        "1",
+    ];
     write_scene(&dir, |v| {
         v["shapes"][1]["sdf"]["rounding"] = serde_json::json!(0)
     });
-    let out = run(
-        &dir,
-        &["diff", "scene.json", "--param", "ball.radius", "--spp", "1"],
-    );
-    let stdout = assert_success(&out);
+    let stdout = assert_success(&run(&dir, &args));
+    assert!(!stdout.contains("crease"), "{stdout}");
+    write_scene(&dir, |v| {
+        v["shapes"][1]["sdf"]["rounding"] = serde_json::json!(0);
+        v["integrator"] = serde_json::json!({"type": "path", "max_depth": 2});
+    });
+    let stdout = assert_success(&run(&dir, &args));
     assert!(
         stdout.contains("not sampled along crease curves")
-            && stdout.contains("floor (sharp box (rounding 0): the shadows of its edges)"),
+            && stdout.contains(
+                "floor (sharp box (rounding 0): its edges, for paths that reach it after a bounce)"
+            ),
+        "{stdout}"
+    );
+    write_scene(&dir, |v| {
+        let ball = v["shapes"][0]["sdf"].clone();
+        v["shapes"][0]["sdf"] = serde_json::json!({"type": "intersection", "children": [
+            ball,
+            {"type": "sphere", "center": [0.5, 0.0, 0.0], "radius": 1.0}
+        ]});
+    });
+    let stdout = assert_success(&run(&dir, &args));
+    assert!(
+        stdout.contains("ball (hard intersection of children whose surfaces cross)"),
         "{stdout}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

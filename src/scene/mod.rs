@@ -267,13 +267,19 @@ impl Scene {
             .collect()
     }
 
-    /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, what is
-    /// missing)` ([`Sdf::unsampled_creases`]): derivatives that move those curves (any geometric
-    /// parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    /// The shapes with crease curves whose boundary terms are not sampled with this scene's
+    /// integrator, as `(shape name, what is missing)` ([`Sdf::unsampled_creases`]): derivatives that
+    /// move those curves (any geometric parameter of the scene, through the camera, the lights or the
+    /// shape) miss those terms.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
+        let bounces = self.integrator.max_scatter() >= 2;
         self.shapes
             .iter()
-            .filter_map(|s| s.sdf.unsampled_creases().map(|r| (s.name.clone(), r)))
+            .filter_map(|s| {
+                s.sdf
+                    .unsampled_creases(bounces)
+                    .map(|r| (s.name.clone(), r))
+            })
             .collect()
     }
 
@@ -475,11 +481,15 @@ mod tests {
         let edges = scene.creased_shapes();
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|(i, _)| *i == 1));
+        // `direct`: the sharp box's edges are sampled in full; `path` misses them after a bounce.
+        assert!(scene.unsampled_creases().is_empty());
+        scene.integrator = IntegratorKind::Path { max_depth: 3 };
         assert_eq!(
             scene.unsampled_creases(),
             vec![(
                 "crate".to_string(),
-                "sharp box (rounding 0): the shadows of its edges".to_string()
+                "sharp box (rounding 0): its edges, for paths that reach it after a bounce"
+                    .to_string()
             )]
         );
     }

@@ -54,8 +54,9 @@
 //! with `L∓` one camera path each (the integrator's own estimator) through `u_C ∓ ε n_img`, `ε` = 1/50
 //! pixel, averaged over the `N` samples of its own random stream ([`CREASE_STREAM`]).
 //!
-//! **Not included here**: the shadows of crease edges (the secondary term along them), and the creases
-//! where two CSG children cross ([`crate::sdf::Sdf::creases`] lists what remains).
+//! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]). Not included: the
+//! creases where two CSG children cross, and the tear at vertices after the first (docs/theory.md §7.4;
+//! [`crate::scene::Scene::unsampled_creases`] lists what a scene misses).
 
 use super::frustum::Frustum;
 use super::{
@@ -213,6 +214,13 @@ impl CreaseEdges {
     }
 }
 
+/// Whether the edge point `x` lies on `shape`'s surface (`|φ|` within a tolerance there): not inside
+/// another CSG child, not cut away. False for a NaN value.
+pub(crate) fn on_surface(scene: &Scene, shape: &Shape, x: glam::Vec3) -> bool {
+    let phi = shape.eval_f32(x).abs();
+    phi <= scene.trace.eps_at_point(x)
+}
+
 /// `∇F` of a face function of `edge` on `shape` at the world point `x` (f32, by forward-mode AD).
 pub(crate) fn face_gradient(
     shape: &Shape,
@@ -317,8 +325,7 @@ fn sample<S: Directions>(
     let (shape_index, edge) = creases.edge(pt.edge);
     let shape = &scene.shapes[*shape_index];
     let x = pt.x;
-    // Only where the edge is on the shape's surface (not inside another CSG child, not cut away).
-    if !(shape.eval_f32(x).abs() <= scene.trace.eps_at_point(x)) {
+    if !on_surface(scene, shape, x) {
         return;
     }
     let frame = scene.camera.frame::<f32>();

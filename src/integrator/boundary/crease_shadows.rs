@@ -25,7 +25,7 @@
 //! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an
 //! edge that are not on the shape's surface (inside another CSG child, or cut away) contribute 0.
 
-use super::crease_edges::{CreaseEdges, face_gradient};
+use super::crease_edges::{CreaseEdges, face_gradient, on_surface};
 use super::run_samples;
 use super::secondary::{Context, Occluder};
 use super::tangent_sampling::TangentSampling;
@@ -132,7 +132,7 @@ fn sample<S: Directions>(
     let (m, edge) = edges.edge(pt.edge);
     let shape = &scene.shapes[*m];
     let x_b = pt.x;
-    if !(shape.eval_f32(x_b).abs() <= scene.trace.eps_at_point(x_b)) {
+    if !on_surface(scene, shape, x_b) {
         return;
     }
     let Some((w, pdf)) = sample_direction(scene, x_b, sampler) else {
@@ -140,7 +140,8 @@ fn sample<S: Directions>(
     };
     let grads = [0, 1].map(|f| face_gradient(shape, edge, f, x_b));
     let side = grads[0].dot(w) * grads[1].dot(w);
-    if !(side < 0.0) {
+    // The faces must lie on opposite sides of the line (NaN: no).
+    if side.is_nan() || side >= 0.0 {
         return;
     }
     let weight = edges.total_length() / pdf;

@@ -1,5 +1,5 @@
-//! Boundary terms of the derivative (docs/theory.md §3): visibility along a segment jumps
-//! where the segment touches a surface tangentially.
+//! Boundary terms of the derivative (docs/theory.md §3, §7): visibility along a segment jumps
+//! where the segment touches a surface tangentially or passes a crease edge.
 //!
 //! [`segment`] holds the geometry of one boundary segment `(x_S, x_B, x_D)`: the measure changes
 //! (`J^B`, supplemental §2 eqs. 12–23; the primary `dℓ(x_D)/dℓ(x_B)`, supplemental eq. 15), the silhouette test, and the
@@ -7,8 +7,10 @@
 //! boundary term (shadows, on every segment of a path after the first) with them, its tangent angles
 //! steered towards the emitters by [`tangent_sampling`] and [`subpaths`] estimating the camera and
 //! light sides of segments deep in a path; [`primary`] the primary boundary term (silhouettes seen from
-//! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Both integrators
-//! (`direct` is `path` with one scattering vertex).
+//! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Crease edges of sharp
+//! boxes and cylinders: [`crease_edges`] (seen from the camera), [`crease_segment`] (the geometry of a
+//! segment passing an edge) and [`crease_shadows`] (their secondary term). Both integrators (`direct`
+//! is `path` with one scattering vertex).
 
 pub mod crease_edges;
 pub mod crease_segment;

@@ -114,9 +114,11 @@
 //! sample drew (which `x_B` is a function of), deterministic whatever the thread count, and untouched by
 //! changes to how `(x_B, θ_B)` are drawn.
 //!
-//! **Scope.** Both integrators. Not included: the primary boundary (silhouettes seen from the camera,
+//! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
+//! boxes and cylinders ([`super::crease_shadows`], through [`Occluder`]); [`split`] shares the samples
+//! between the two kinds. Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
-//! crease edges.
+//! the creases of hard CSG.
 
 use super::crease_segment::CreaseSegment;
 use super::crease_shadows::run_crease_shadows;
