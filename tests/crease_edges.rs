@@ -354,10 +354,6 @@ fn hard_cases_are_finite() {
 /// A turned sharp box above a floor plane under a rectangle light: the shadows of its edges move with
 /// the box and the light (the secondary term along crease edges).
 fn box_shadow_scene(integrator: &str) -> implicit_psdr::scene::Scene {
-    box_shadow_scene_albedo(integrator, 0.8)
-}
-
-fn box_shadow_scene_albedo(integrator: &str, albedo: f32) -> implicit_psdr::scene::Scene {
     scene_json(&format!(
         r#"{{
   "camera": {{"origin": [0, 3, 4], "target": [0, -0.3, 0], "up": [0, 1, 0],
@@ -368,7 +364,7 @@ fn box_shadow_scene_albedo(integrator: &str, albedo: f32) -> implicit_psdr::scen
      "sdf": {{"type": "transform", "translate": [0, 0.2, 0],
              "rotate": {{"axis": [0.3, 1, 0.2], "angle": 25}}, "scale": 1.0,
              "child": {{"type": "box", "center": [0, 0, 0], "half_size": [0.5, 0.4, 0.45], "rounding": 0}}}},
-     "bsdf": {{"type": "diffuse", "albedo": [{albedo}, {albedo}, {albedo}]}}}},
+     "bsdf": {{"type": "diffuse", "albedo": [0.8, 0.6, 0.4]}}}},
     {{"name": "floor", "sdf": {{"type": "plane", "normal": [0, 1, 0], "offset": -0.6}},
      "bsdf": {{"type": "diffuse", "albedo": [0.6, 0.6, 0.6]}}}}
   ],
@@ -423,14 +419,12 @@ fn sharp_box_shadow_direct() {
 }
 
 /// The shadow scene on `path` (depth 3): shadow segments that start after a bounce, segments ending on
-/// the floor and continued.
+/// the floor and continued, and the box's faces lit by the floor, whose tear at the edges is its own
+/// term (without it the translation's error stays at 0.068 at 4× the budget; with it 0.023, the finite
+/// differences' own noise).
 #[test]
 fn sharp_box_shadow_path() {
-    // A black box: paths that reach it after a bounce carry nothing. Where they do carry light the
-    // complete derivative misses the tear of the box's parametrisation at its edges for vertices after
-    // the first (docs/theory.md §7.3): with albedo 0.8 the translation's error stays at 0.07 (blurred
-    // relative L2) at 4× the budget, against 0.019 here, the finite differences' own noise.
-    let scene = box_shadow_scene_albedo(r#"{"type": "path", "max_depth": 3}"#, 0.0);
+    let scene = box_shadow_scene(r#"{"type": "path", "max_depth": 3}"#);
     let budget = Budget {
         spp: 128,
         primary: 200_000,
@@ -444,16 +438,16 @@ fn sharp_box_shadow_path() {
             Check {
                 name: "block.sdf.translate.x",
                 h: 0.02,
-                // Seeds 0 and 1: L2 (0.030, 0.026), sums ≤ (0.014, 0.009); interior alone 0.92.
-                l2: 0.06,
-                sum: 0.03,
+                // Seeds 0 and 1: L2 (0.035, 0.036), sums ≤ (0.023, 0.006); interior alone 0.85.
+                l2: 0.075,
+                sum: 0.05,
             },
             Check {
                 name: "light.center.x",
                 h: 0.05,
-                // Seeds 0 and 1: L2 (0.014, 0.017), sums ≤ (0.008, 0.002); interior alone 0.31.
-                l2: 0.035,
-                sum: 0.016,
+                // Seeds 0 and 1: L2 (0.013, 0.015), sums ≤ (0.013, 0.009); interior alone 0.25.
+                l2: 0.03,
+                sum: 0.026,
             },
         ],
         budget,

@@ -267,19 +267,13 @@ impl Scene {
             .collect()
     }
 
-    /// The shapes with crease curves whose boundary terms are not sampled with this scene's
-    /// integrator, as `(shape name, what is missing)` ([`Sdf::unsampled_creases`]): derivatives that
-    /// move those curves (any geometric parameter of the scene, through the camera, the lights or the
-    /// shape) miss those terms.
+    /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, reason)`
+    /// ([`Sdf::unsampled_creases`]: hard CSG creases): derivatives that move those curves (any
+    /// geometric parameter of the scene, through the camera, the lights or the shape) miss those terms.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
-        let bounces = self.integrator.max_scatter() >= 2;
         self.shapes
             .iter()
-            .filter_map(|s| {
-                s.sdf
-                    .unsampled_creases(bounces)
-                    .map(|r| (s.name.clone(), r))
-            })
+            .filter_map(|s| s.sdf.unsampled_creases().map(|r| (s.name.clone(), r)))
             .collect()
     }
 
@@ -481,15 +475,21 @@ mod tests {
         let edges = scene.creased_shapes();
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|(i, _)| *i == 1));
-        // `direct`: the sharp box's edges are sampled in full; `path` misses them after a bounce.
+        // The sharp box's edges are sampled; a hard CSG crease is not.
         assert!(scene.unsampled_creases().is_empty());
-        scene.integrator = IntegratorKind::Path { max_depth: 3 };
+        scene.shapes.push(Shape::new(
+            "lens",
+            Sdf::Intersection(vec![
+                Sdf::sphere([0.0, 3.0, 0.0], 1.0),
+                Sdf::sphere([0.5, 3.0, 0.0], 1.0),
+            ]),
+            bsdf,
+        ));
         assert_eq!(
             scene.unsampled_creases(),
             vec![(
-                "crate".to_string(),
-                "sharp box (rounding 0): its edges, for paths that reach it after a bounce"
-                    .to_string()
+                "lens".to_string(),
+                "hard intersection of children whose surfaces cross".to_string()
             )]
         );
     }

@@ -1,8 +1,10 @@
 //! Which nodes have crease edges (docs/theory.md §7): curves where the surface normal jumps. A
 //! crease seen from the camera or from a light is a boundary curve of its own (its image moves with the
 //! parameters, and the visibility jumps across it), which the silhouette-based boundary terms do not
-//! sample. Where a derivative is requested through a creased shape, the caller must warn that those terms
-//! are missing rather than drop them silently.
+//! sample. The edges of sharp primitives have their own estimators ([`Sdf::crease_edges`]); where a
+//! derivative is requested through a crease no estimator samples (hard CSG,
+//! [`Sdf::unsampled_creases`]), the caller must warn that those terms are missing rather than drop
+//! them silently.
 //!
 //! - **Primitives**: a box or a cylinder with `rounding = 0` has sharp edges (the box's twelve edges, the
 //!   cylinder's two rims). Spheres, tori, capsules and planes have none (the capsule is C1 where its
@@ -33,51 +35,39 @@ impl Sdf {
     /// reported). Transforms, names (prefixed `"name: "`) and smooth unions keep their children's
     /// creases.
     pub fn creases(&self) -> Option<String> {
-        self.crease_reasons(None)
+        self.crease_reasons(false)
     }
 
-    /// The crease curves of this node whose boundary terms the estimators do not sample, with what is
-    /// missing; `None` when nothing is. Every crease of hard CSG; and with `bounces` (an integrator
-    /// whose paths scatter more than once), the edges of sharp boxes and the rims of sharp cylinders for
-    /// paths that reach them after a bounce (their primary and secondary terms are sampled,
-    /// [`Sdf::crease_edges`]; the tear of their parametrisation at vertices after the first is not).
-    /// Reasons are worded as [`Sdf::creases`]'s, joined by `"; "`.
-    pub fn unsampled_creases(&self, bounces: bool) -> Option<String> {
-        self.crease_reasons(Some(bounces))
+    /// The crease curves of this node whose boundary terms the estimators do not sample: every crease of
+    /// hard CSG whose children's surfaces may cross (the edges of sharp boxes and the rims of sharp
+    /// cylinders are sampled, [`Sdf::crease_edges`]). `None` when nothing is missing. Reasons are
+    /// worded as [`Sdf::creases`]'s, joined by `"; "`.
+    pub fn unsampled_creases(&self) -> Option<String> {
+        self.crease_reasons(true)
     }
 
-    /// All reasons (`unsampled` = `None`), or only what the estimators miss (`Some(bounces)`).
-    fn crease_reasons(&self, unsampled: Option<bool>) -> Option<String> {
+    /// All reasons, or with `unsampled` only those of creases the estimators do not sample.
+    fn crease_reasons(&self, unsampled: bool) -> Option<String> {
         let mut reasons = Vec::new();
         self.collect_creases(unsampled, &mut reasons);
         reasons.dedup();
         (!reasons.is_empty()).then(|| reasons.join("; "))
     }
 
-    /// Pushes this node's crease reasons; with `unsampled`, only and worded as what the estimators miss.
-    fn collect_creases(&self, unsampled: Option<bool>, out: &mut Vec<String>) {
+    /// Pushes this node's crease reasons; with `unsampled`, only those the estimators do not sample.
+    fn collect_creases(&self, unsampled: bool, out: &mut Vec<String>) {
         let mut push = |s: String| {
             if !out.contains(&s) {
                 out.push(s);
             }
         };
         match self {
-            Sdf::Box { rounding, .. } if rounding.value <= 0.0 => match unsampled {
-                None => push("sharp box (rounding 0)".into()),
-                Some(true) => push(
-                    "sharp box (rounding 0): its edges, for paths that reach it after a bounce".into(),
-                ),
-                Some(false) => {}
-            },
-            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 => match unsampled {
-                None => push("cylinder with sharp rims (rounding 0)".into()),
-                Some(true) => push(
-                    "cylinder with sharp rims (rounding 0): its rims, for paths that reach it after \
-                     a bounce"
-                        .into(),
-                ),
-                Some(false) => {}
-            },
+            Sdf::Box { rounding, .. } if rounding.value <= 0.0 && !unsampled => {
+                push("sharp box (rounding 0)".into());
+            }
+            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 && !unsampled => {
+                push("cylinder with sharp rims (rounding 0)".into());
+            }
             Sdf::Union(children) => hard_csg(children, "union", unsampled, out),
             Sdf::Intersection(children) => hard_csg(children, "intersection", unsampled, out),
             Sdf::Difference(children) => hard_csg(children, "difference", unsampled, out),
@@ -106,7 +96,7 @@ impl Sdf {
 }
 
 /// The children's own creases, then one reason for the node if two children's surfaces may cross.
-fn hard_csg(children: &[Sdf], op: &str, unsampled: Option<bool>, out: &mut Vec<String>) {
+fn hard_csg(children: &[Sdf], op: &str, unsampled: bool, out: &mut Vec<String>) {
     for c in children {
         c.collect_creases(unsampled, out);
     }

@@ -54,9 +54,9 @@
 //! with `L∓` one camera path each (the integrator's own estimator) through `u_C ∓ ε n_img`, `ε` = 1/50
 //! pixel, averaged over the `N` samples of its own random stream ([`CREASE_STREAM`]).
 //!
-//! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]). Not included: the
-//! creases where two CSG children cross, and the tear at vertices after the first (docs/theory.md §7.4;
-//! [`crate::scene::Scene::unsampled_creases`] lists what a scene misses).
+//! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]), the tear at
+//! vertices after the first [`super::crease_tears`]'s. Not included: the creases where two CSG
+//! children cross ([`crate::scene::Scene::unsampled_creases`] lists them).
 
 use super::frustum::Frustum;
 use super::{

@@ -70,7 +70,7 @@ fn direction_pdf(scene: &Scene, x: glam::Vec3, w: glam::Vec3) -> f32 {
 }
 
 /// A direction from `x` drawn by (1), with its density; `None` when the emitter sample fails.
-fn sample_direction(
+pub(crate) fn sample_direction(
     scene: &Scene,
     x: glam::Vec3,
     sampler: &mut Sampler,

@@ -9,12 +9,14 @@
 //! light sides of segments deep in a path; [`primary`] the primary boundary term (silhouettes seen from
 //! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Crease edges of sharp
 //! boxes and cylinders: [`crease_edges`] (seen from the camera), [`crease_segment`] (the geometry of a
-//! segment passing an edge) and [`crease_shadows`] (their secondary term). Both integrators (`direct`
-//! is `path` with one scattering vertex).
+//! segment passing an edge), [`crease_shadows`] (their secondary term) and [`crease_tears`] (the tear
+//! of a creased surface's parametrisation at later vertices). Both integrators (`direct` is `path`
+//! with one scattering vertex).
 
 pub mod crease_edges;
 pub mod crease_segment;
 pub mod crease_shadows;
+pub mod crease_tears;
 pub mod emitter_edges;
 mod frustum;
 pub mod primary;

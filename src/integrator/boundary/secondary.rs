@@ -116,12 +116,13 @@
 //!
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
 //! boxes and cylinders ([`super::crease_shadows`], through [`Occluder`]); [`split`] shares the samples
-//! between the two kinds. Not included: the primary boundary (silhouettes seen from the camera,
+//! between them and the tear of creased surfaces at later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
 //! the creases of hard CSG.
 
 use super::crease_segment::CreaseSegment;
 use super::crease_shadows::run_crease_shadows;
+use super::crease_tears;
 use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
@@ -249,6 +250,9 @@ pub enum SecondarySource {
     Silhouettes,
     /// Crease edges of sharp boxes and cylinders ([`super::crease_shadows`]).
     CreaseEdges,
+    /// The tear of creased surfaces' parametrisation at vertices after the first
+    /// ([`super::crease_tears`]; integrators with two or more scattering vertices).
+    CreaseTears,
 }
 
 /// How `samples` secondary samples are shared: equally between the kinds of occluder the scene has.
@@ -264,6 +268,7 @@ pub fn split(scene: &Scene, samples: u64) -> Vec<(SecondarySource, u64)> {
                 SecondarySource::CreaseEdges,
                 !scene.creased_shapes().is_empty(),
             ),
+            (SecondarySource::CreaseTears, crease_tears::applies(scene)),
         ],
     )
 }
@@ -287,6 +292,9 @@ where
         }
         SecondarySource::CreaseEdges => {
             run_crease_shadows::<S, F>(scene, seed, samples, progress, film)
+        }
+        SecondarySource::CreaseTears => {
+            crease_tears::run_crease_tears::<S, F>(scene, seed, samples, progress, film)
         }
     }
 }

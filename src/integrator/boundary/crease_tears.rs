@@ -1,0 +1,217 @@
+//! The tear of a creased surface's parametrisation at vertices after the first (docs/theory.md §7.4),
+//! for the `path` integrator: the boundary term along a sharp box's edges and a sharp cylinder's rims
+//! for paths that reach them after a bounce.
+//!
+//! # The term
+//!
+//! The interior term moves each face's points along that face's normal (`x + V n`). At a crease the two
+//! faces move along different normals, so the moving edge slides along each face relative to the face's
+//! attached points: in the reference domain of face `f` the face's region grows by `ẋ_C·m_f` per unit
+//! length of edge, `m_f` the unit tangent of face `f` across the edge pointing out of the face's region
+//! (`∇F_other·m_f > 0`) and `ẋ_C` the edge point's velocity ([`super::crease_edges::moving_edge_point`]).
+//! The face's own attached points move along `n_f ⊥ m_f`, so no relative term appears. For a path
+//! integral over a vertex `x_k` on the creased surface (docs/theory.md §2.4, §5.6),
+//!
+//! ```text
+//!   ∂I_j ⊃ Σ_f ∫_edge F_f(x_C) (ẋ_C·m_f) dℓ                                                         (1)
+//! ```
+//!
+//! `F_f` the path integrand with `x_k = x_C` on face `f` (its normal for the BSDF and the geometry
+//! terms), every other vertex integrated. The first vertex (`k = 1`) is the primary crease term's
+//! ([`super::crease_edges`], whose `v − u̇` holds this sliding in film space); here `k ≥ 2`.
+//!
+//! # The estimator
+//!
+//! `x_C` uniform on the total length `Λ` of the scene's crease edges; for each face `f`, one direction
+//! `ω` of the next segment from the mixture of [`super::crease_shadows`] (uniform on the sphere or
+//! towards an emitter, density `p(ω)`), the radiance `L(ω)` arriving along it (emission, the
+//! environment, or a path continued with the primal's estimator, truncated per depth as in
+//! [`super::subpaths::radiance_by_depth`]), and the camera side of [`super::subpaths::camera_side`] from
+//! `x_C` with normal `n_f` towards `ω` (its connections at depth `k ≥ 2`). One sample contributes
+//!
+//! ```text
+//!   Σ_f Σ_{k ≥ 2} W_k · L^{(D−k)}(ω) |n_f·ω| / p(ω) · (ẋ_C·m_f) · Λ                                  (2)
+//! ```
+//!
+//! splatted where each camera connection projects.
+
+use super::crease_edges::{CreaseEdges, face_gradient, moving_edge_point, on_surface};
+use super::crease_shadows::sample_direction;
+use super::subpaths::{CameraVertex, camera_side, radiance_by_depth};
+use super::{finite_splat, run_samples, splat_on_film};
+use crate::film::{Film, SampleSink};
+use crate::integrator::driver::RenderStats;
+use crate::integrator::options::Progress;
+use crate::integrator::path::{PathRecord, TraceCounters};
+use crate::math::{Ray, Vec3};
+use crate::sampler::Sampler;
+use crate::scalar::Directions;
+use crate::scene::{Intersection, Scene, Surface};
+
+/// The random stream of crease-tear samples.
+pub const CREASE_TEAR_STREAM: u64 = 0x7EA2_C2EA;
+
+/// Whether the scene's paths can reach a crease after a bounce (the term exists): an integrator with
+/// two or more scattering vertices and a crease edge.
+pub fn applies(scene: &Scene) -> bool {
+    scene.integrator.max_scatter() >= 2 && !scene.creased_shapes().is_empty()
+}
+
+/// The tear samples `0..samples` into any film (their shares not yet divided by `samples`).
+pub(crate) fn run_crease_tears<S: Directions, F: Film>(
+    scene: &Scene,
+    seed: u64,
+    samples: u64,
+    progress: &Progress,
+    film: &mut F,
+) -> RenderStats
+where
+    F::Tile: SampleSink<S>,
+{
+    let edges = CreaseEdges::all(scene);
+    if edges.is_empty() || !applies(scene) {
+        return RenderStats::default();
+    }
+    run_samples::<S, F, _>(
+        film,
+        samples,
+        ("secondary (crease tears)", progress),
+        Scratch::default,
+        |scratch, counters, k, splats| {
+            let mut sampler = Sampler::new(seed, CREASE_TEAR_STREAM, 0, k);
+            sample(scene, &edges, &mut sampler, scratch, splats, counters);
+        },
+    )
+}
+
+/// Buffers reused between samples.
+#[derive(Default)]
+struct Scratch {
+    cams: Vec<CameraVertex>,
+    record: PathRecord,
+    truncated: PathRecord,
+    by_depth: Vec<glam::Vec3>,
+}
+
+/// One sample of eq. (2): pushes its splats (not yet divided by the sample count).
+fn sample<S: Directions>(
+    scene: &Scene,
+    edges: &CreaseEdges,
+    sampler: &mut Sampler,
+    scratch: &mut Scratch,
+    splats: &mut impl SampleSink<S>,
+    counters: &mut TraceCounters,
+) {
+    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
+    let Some(pt) = edges.sample([u0, u1]) else {
+        return;
+    };
+    let (m, edge) = edges.edge(pt.edge);
+    let shape = &scene.shapes[*m];
+    let x = pt.x;
+    if !on_surface(scene, shape, x) {
+        return;
+    }
+    let Some(moving) = moving_edge_point::<S>(shape, edge, x) else {
+        return;
+    };
+    let velocity = moving - Vec3::constant(x);
+    let grads = [0, 1].map(|f| face_gradient(shape, edge, f, x));
+    let depth = scene.integrator.max_scatter();
+    let frame = scene.camera.frame::<f32>();
+    for f in 0..2 {
+        let Some(n) = grads[f].try_normalize() else {
+            continue;
+        };
+        // Across the edge in face f's tangent plane, out of the face's region (towards the other
+        // face's outside).
+        let Some(mut across) = pt.tangent.cross(n).try_normalize() else {
+            continue;
+        };
+        if across.dot(grads[1 - f]) < 0.0 {
+            across = -across;
+        }
+        let Some((w, pdf)) = sample_direction(scene, x, sampler) else {
+            continue;
+        };
+        let cos = n.dot(w);
+        if cos.is_nan() || cos <= 0.0 {
+            continue;
+        }
+        // The radiance arriving along w, per number of scattering vertices after x_C (index j):
+        // emission and the environment at every j ≥ 0, a shape's continued path L^{(j)}.
+        let origin = scene.offset_origin(*m, x, n, w);
+        let ray = Ray::new(origin, w);
+        // `None`: a shape's continued path, `scratch.by_depth[j]` = L^{(j)}.
+        let (constant, max_k): (Option<glam::Vec3>, u32) =
+            match scene.intersect(&ray, f32::INFINITY) {
+                Intersection::Hit(h) => match h.surface {
+                    Surface::Emitter(e) => {
+                        let le = scene.emitters[e].emitter.emitted::<f32>(
+                            h.p.into(),
+                            h.n.into(),
+                            (-w).into(),
+                        );
+                        (Some(le.into()), depth)
+                    }
+                    Surface::Shape(d) if depth >= 3 => {
+                        if !radiance_by_depth(
+                            scene,
+                            ray,
+                            d,
+                            depth - 2,
+                            sampler,
+                            &mut scratch.record,
+                            &mut scratch.truncated,
+                            &mut scratch.by_depth,
+                            counters,
+                        ) {
+                            continue;
+                        }
+                        (None, depth - 1)
+                    }
+                    Surface::Shape(_) => continue,
+                },
+                Intersection::Miss => match scene.environment {
+                    Some(e) => {
+                        let le = scene.emitters[e].emitter.emitted::<f32>(
+                            x.into(),
+                            (-w).into(),
+                            (-w).into(),
+                        );
+                        (Some(le.into()), depth)
+                    }
+                    None => continue,
+                },
+                Intersection::Exhausted => {
+                    counters.exhausted += 1;
+                    continue;
+                }
+            };
+        camera_side(
+            scene,
+            &frame,
+            *m,
+            x,
+            n,
+            w,
+            max_k,
+            sampler,
+            &mut scratch.cams,
+            counters,
+        );
+        let rate = velocity.dot(Vec3::constant(across));
+        for cam in scratch.cams.iter().filter(|c| c.depth >= 2) {
+            // x_C is the k-th scattering vertex: the radiance after it has at most D − k more.
+            let l = constant.unwrap_or_else(|| scratch.by_depth[(depth - cam.depth) as usize]);
+            let scale = cam.f * l * (cos / pdf * cam.j_film * edges.total_length());
+            if scale == glam::Vec3::ZERO || !scale.is_finite() {
+                continue;
+            }
+            let value = Vec3::<S>::constant(scale) * rate;
+            if finite_splat(&value, S::zero()) {
+                splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
+            }
+        }
+    }
+}
