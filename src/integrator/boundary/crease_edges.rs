@@ -292,18 +292,10 @@ where
         film,
         samples,
         ("primary (crease edges)", &render.progress),
+        (render.seed, CREASE_STREAM),
         PathRecord::default,
-        |record, counters, k, splats| {
-            let mut sampler = Sampler::new(render.seed, CREASE_STREAM, 0, k);
-            sample(
-                scene,
-                &attach,
-                creases,
-                &mut sampler,
-                record,
-                splats,
-                counters,
-            );
+        |record, sampler, counters, splats| {
+            sample(scene, &attach, creases, sampler, record, splats, counters);
         },
     )
 }

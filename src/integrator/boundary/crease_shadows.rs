@@ -108,10 +108,10 @@ where
         film,
         samples,
         ("secondary (crease edges)", progress),
+        (seed, CREASE_SHADOW_STREAM),
         || (),
-        |_, counters, k, splats| {
-            let mut sampler = Sampler::new(seed, CREASE_SHADOW_STREAM, 0, k);
-            sample(&ctx, &edges, &mut sampler, splats, counters);
+        |_, sampler, counters, splats| {
+            sample(&ctx, &edges, sampler, splats, counters);
         },
     )
 }

@@ -76,10 +76,10 @@ where
         film,
         samples,
         ("secondary (crease tears)", progress),
+        (seed, CREASE_TEAR_STREAM),
         Scratch::default,
-        |scratch, counters, k, splats| {
-            let mut sampler = Sampler::new(seed, CREASE_TEAR_STREAM, 0, k);
-            sample(scene, &edges, &mut sampler, scratch, splats, counters);
+        |scratch, sampler, counters, splats| {
+            sample(scene, &edges, sampler, scratch, splats, counters);
         },
     )
 }

@@ -278,18 +278,10 @@ where
         film,
         samples,
         ("primary (emitter outlines)", &render.progress),
+        (render.seed, EDGE_STREAM),
         PathRecord::default,
-        |record, counters, k, splats| {
-            let mut sampler = Sampler::new(render.seed, EDGE_STREAM, 0, k);
-            sample(
-                scene,
-                &attach,
-                outlines,
-                &mut sampler,
-                record,
-                splats,
-                counters,
-            );
+        |record, sampler, counters, splats| {
+            sample(scene, &attach, outlines, sampler, record, splats, counters);
         },
     )
 }

@@ -47,14 +47,16 @@ use crate::scene::Scene;
 const CHUNK: u64 = 256;
 
 /// Runs boundary samples `0..samples` in parallel chunks on the [`driver`] into `film` (`state()` once
-/// per chunk, `sample(state, counters, k, tile)` for sample `k`, between the tile's `begin_sample` and
-/// `end_sample`). Returns the counts of the traced rays; `stage` names the work for `progress`.
+/// per chunk, `sample(state, sampler, counters, tile)` for sample `k` with the [`Sampler`] of `(seed,
+/// stream)` for index `k`, between the tile's `begin_sample` and `end_sample`). Returns the counts of
+/// the traced rays; `stage` names the work for `progress`.
 pub(crate) fn run_samples<S: Scalar, F: Film, T>(
     film: &mut F,
     samples: u64,
     (stage, progress): (&str, &Progress),
+    (seed, stream): (u64, u64),
     state: impl Fn() -> T + Sync,
-    sample: impl Fn(&mut T, &mut TraceCounters, u64, &mut F::Tile) + Sync,
+    sample: impl Fn(&mut T, &mut Sampler, &mut TraceCounters, &mut F::Tile) + Sync,
 ) -> RenderStats
 where
     F::Tile: SampleSink<S>,
@@ -68,8 +70,9 @@ where
         let mut st = state();
         let mut counters = TraceCounters::default();
         for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
+            let mut sampler = Sampler::new(seed, stream, 0, k);
             tile.begin_sample();
-            sample(&mut st, &mut counters, k, tile);
+            sample(&mut st, &mut sampler, &mut counters, tile);
             tile.end_sample();
         }
         stats.exhausted_rays += counters.exhausted;

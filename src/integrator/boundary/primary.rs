@@ -347,18 +347,10 @@ where
         film,
         samples,
         ("primary", progress),
+        (seed, PRIMARY_STREAM),
         PathRecord::default,
-        |record, counters, k, splats| {
-            let mut sampler = Sampler::new(seed, PRIMARY_STREAM, 0, k);
-            sample(
-                scene,
-                &attach,
-                curves,
-                &mut sampler,
-                record,
-                splats,
-                counters,
-            );
+        |record, sampler, counters, splats| {
+            sample(scene, &attach, curves, sampler, record, splats, counters);
         },
     )
 }

@@ -330,10 +330,10 @@ where
         film,
         samples,
         ("secondary", progress),
+        (seed, BOUNDARY_STREAM),
         Vec::new,
-        |hits, counters, k, splats| {
-            let mut sampler = Sampler::new(seed, BOUNDARY_STREAM, 0, k);
-            ctx.sample(&mut sampler, hits, splats, counters);
+        |hits, sampler, counters, splats| {
+            ctx.sample(sampler, hits, splats, counters);
         },
     )
 }
