@@ -193,6 +193,20 @@ impl CreaseEdges {
         &self.edges[i]
     }
 
+    /// [`Self::sample`] with two numbers of `sampler`, and the point's shape index and edge; `None` when
+    /// empty or when the point is not on the shape's surface ([`on_surface`]), where every crease
+    /// term's integrand is 0.
+    pub(crate) fn sample_on_surface(
+        &self,
+        scene: &Scene,
+        sampler: &mut Sampler,
+    ) -> Option<(EdgePoint, usize, &CreaseEdge)> {
+        let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
+        let pt = self.sample([u0, u1])?;
+        let (m, edge) = &self.edges[pt.edge];
+        on_surface(scene, &scene.shapes[*m], pt.x).then_some((pt, *m, edge))
+    }
+
     /// A point uniform on the total length from two uniform numbers in `[0, 1)`; `None` when empty.
     pub fn sample(&self, u: [f32; 2]) -> Option<EdgePoint> {
         if self.pieces.is_empty() {
@@ -310,16 +324,11 @@ fn sample<S: Directions>(
     splats: &mut impl SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
-    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
-    let Some(pt) = creases.sample([u0, u1]) else {
+    let Some((pt, m, edge)) = creases.sample_on_surface(scene, sampler) else {
         return;
     };
-    let (shape_index, edge) = creases.edge(pt.edge);
-    let shape = &scene.shapes[*shape_index];
+    let shape = &scene.shapes[m];
     let x = pt.x;
-    if !on_surface(scene, shape, x) {
-        return;
-    }
     let frame = scene.camera.frame::<f32>();
     let eye: glam::Vec3 = frame.origin.into();
     let q = x - eye;

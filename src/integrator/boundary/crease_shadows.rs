@@ -25,7 +25,7 @@
 //! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an
 //! edge that are not on the shape's surface (inside another CSG child, or cut away) contribute 0.
 
-use super::crease_edges::{CreaseEdges, face_gradient, on_surface};
+use super::crease_edges::{CreaseEdges, face_gradient};
 use super::run_samples;
 use super::secondary::{Context, Occluder};
 use super::tangent_sampling::TangentSampling;
@@ -125,16 +125,11 @@ fn sample<S: Directions>(
     counters: &mut TraceCounters,
 ) {
     let scene = ctx.scene;
-    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
-    let Some(pt) = edges.sample([u0, u1]) else {
+    let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {
         return;
     };
-    let (m, edge) = edges.edge(pt.edge);
-    let shape = &scene.shapes[*m];
+    let shape = &scene.shapes[m];
     let x_b = pt.x;
-    if !on_surface(scene, shape, x_b) {
-        return;
-    }
     let Some((w, pdf)) = sample_direction(scene, x_b, sampler) else {
         return;
     };
@@ -153,7 +148,7 @@ fn sample<S: Directions>(
     else {
         return;
     };
-    let o = scene.offset_origin(*m, x_b, mean_normal, mean_normal);
+    let o = scene.offset_origin(m, x_b, mean_normal, mean_normal);
     // Exhausted traces count as misses, as in the integrator's own paths (see `secondary`).
     let [d_end, s_end] = [w, -w].map(|d| match scene.intersect(&Ray::new(o, d), f32::INFINITY) {
         Intersection::Exhausted => {
@@ -162,6 +157,6 @@ fn sample<S: Directions>(
         }
         end => end,
     });
-    let occluder = Occluder::Crease(*m, edge, pt.tangent);
+    let occluder = Occluder::Crease(m, edge, pt.tangent);
     ctx.segment(occluder, (x_b, o), &s_end, &d_end, weight, splats, counters);
 }

@@ -35,7 +35,7 @@
 //!
 //! splatted where each camera connection projects.
 
-use super::crease_edges::{CreaseEdges, face_gradient, moving_edge_point, on_surface};
+use super::crease_edges::{CreaseEdges, face_gradient, moving_edge_point};
 use super::crease_shadows::sample_direction;
 use super::subpaths::{CameraVertex, camera_side, radiance_by_depth};
 use super::{finite_splat, run_samples, splat_on_film};
@@ -102,16 +102,11 @@ fn sample<S: Directions>(
     splats: &mut impl SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
-    let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
-    let Some(pt) = edges.sample([u0, u1]) else {
+    let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {
         return;
     };
-    let (m, edge) = edges.edge(pt.edge);
-    let shape = &scene.shapes[*m];
+    let shape = &scene.shapes[m];
     let x = pt.x;
-    if !on_surface(scene, shape, x) {
-        return;
-    }
     let Some(moving) = moving_edge_point::<S>(shape, edge, x) else {
         return;
     };
@@ -140,7 +135,7 @@ fn sample<S: Directions>(
         }
         // The radiance arriving along w, per number of scattering vertices after x_C (index j):
         // emission and the environment at every j ≥ 0, a shape's continued path L^{(j)}.
-        let origin = scene.offset_origin(*m, x, n, w);
+        let origin = scene.offset_origin(m, x, n, w);
         let ray = Ray::new(origin, w);
         // `None`: a shape's continued path, `scratch.by_depth[j]` = L^{(j)}.
         let (constant, max_k): (Option<glam::Vec3>, u32) =
@@ -191,7 +186,7 @@ fn sample<S: Directions>(
         camera_side(
             scene,
             &frame,
-            *m,
+            m,
             x,
             n,
             w,
