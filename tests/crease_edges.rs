@@ -311,7 +311,8 @@ fn boxes_scene(
 
 /// Hard cases, every term of every parameter finite (`derivative_terms` asserts it): a face seen exactly
 /// edge-on (the eye in the plane of a box's top face), an edge along the view ray (the eye on the line of
-/// an edge: it projects to a point), and two boxes whose edges cross in the image.
+/// an edge: it projects to a point), two boxes whose edges cross in the image, and a notch (concave
+/// edges of a subtracted box, on `path`).
 #[test]
 fn hard_cases_are_finite() {
     let cases = [
@@ -349,6 +350,41 @@ fn hard_cases_are_finite() {
         println!("{label}: Σ|primary| {primary:.3}");
         assert!(primary > 0.0, "{label}: the crease edges should contribute");
     }
+    // A notch: a sharp box subtracted from a ball leaves concave edges (their faces' normals reversed)
+    // on `path`, so the tear and shadow estimators meet inverted edges.
+    let notch = scene_json(
+        r#"{
+  "camera": {"origin": [0.8, 1.2, 3], "target": [0, 0, 0], "up": [0, 1, 0],
+             "fov_y": 40.0, "width": 24, "height": 24, "filter": "tent"},
+  "integrator": {"type": "path", "max_depth": 3},
+  "shapes": [
+    {"name": "notched", "sdf": {"type": "difference", "children": [
+      {"type": "sphere", "center": [0, 0, 0], "radius": 0.8},
+      {"name": "cut", "type": "box", "center": [0.5, 0.5, 0.5], "half_size": [0.4, 0.4, 0.4], "rounding": 0}
+     ]},
+     "bsdf": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]}}
+  ],
+  "emitters": [
+    {"name": "light", "type": "rectangle", "center": [1, 3, 2], "normal": [-0.3, -1, -0.5],
+     "u": [1, 0, 0], "size": [1, 1], "radiance": [20, 20, 20]},
+    {"name": "sky", "type": "constant", "radiance": [0.3, 0.3, 0.3]}
+  ]
+}"#,
+    );
+    let terms = derivative_terms(
+        &notch,
+        &["cut.center.x", "cut.half_size.y"],
+        8,
+        20_000,
+        20_000,
+        seed(32),
+    );
+    let primary: f64 = terms
+        .iter()
+        .map(|t| t.primary.iter().map(|v| v.abs()).sum::<f64>())
+        .sum();
+    println!("notch: Σ|primary| {primary:.3}");
+    assert!(primary > 0.0, "notch: the concave edges should contribute");
 }
 
 /// A turned sharp box above a floor plane under a rectangle light: the shadows of its edges move with

@@ -10,7 +10,9 @@
 //!
 //! An edge of a primitive inside a CSG tree is on the tree's surface only where the other children leave
 //! it there (a box edge inside a union's other child, or cut away by an intersection, is not): the
-//! caller checks `φ ≈ 0` at each point it uses. Creases where two CSG children cross are not listed
+//! caller checks `φ ≈ 0` at each point it uses. Inside a subtracted child of a difference the solid lies
+//! outside the primitive: the edge is concave and the surface's normal is `−∇F`
+//! ([`CreaseEdge::inverted`]). Creases where two CSG children cross are not listed
 //! here ([`Sdf::creases`] still reports them).
 
 use super::{Sdf, transform};
@@ -95,6 +97,10 @@ pub struct CreaseEdge {
     pub path: Vec<usize>,
     /// The two faces meeting at the edge.
     pub faces: [Face; 2],
+    /// Whether the tree's solid lies outside the primitive here (an odd number of subtracted
+    /// [`Sdf::Difference`] children on the way): the surface's outward normal is then `−∇F` and the
+    /// edge is concave (no line passes it clear on both sides).
+    pub inverted: bool,
 }
 
 /// A similarity `x ↦ t + s R x` accumulated from the transforms above a node, applied innermost first.
@@ -124,7 +130,7 @@ impl Sdf {
     /// this node's coordinates. Empty when there are none.
     pub fn crease_edges(&self) -> Vec<CreaseEdge> {
         let mut out = Vec::new();
-        collect(self, &mut Vec::new(), &mut Placement::default(), &mut out);
+        collect(self, &mut Walk::default(), &mut out);
         out
     }
 
@@ -205,9 +211,18 @@ impl Sdf {
     }
 }
 
-fn collect(node: &Sdf, path: &mut Vec<usize>, place: &mut Placement, out: &mut Vec<CreaseEdge>) {
+/// Where [`collect`] is in the tree: the CSG children taken, the transforms above, and whether the
+/// solid is inverted (inside a subtracted child).
+#[derive(Default)]
+struct Walk {
+    path: Vec<usize>,
+    place: Placement,
+    inverted: bool,
+}
+
+fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
     match node {
-        Sdf::Named { child, .. } => collect(child, path, place, out),
+        Sdf::Named { child, .. } => collect(child, walk, out),
         Sdf::Transform {
             translate,
             axis,
@@ -217,18 +232,24 @@ fn collect(node: &Sdf, path: &mut Vec<usize>, place: &mut Placement, out: &mut V
             ..
         } => {
             let (s, c) = angle.value.to_radians().sin_cos();
-            place.0.push((translate.value(), *axis, c, s, scale.value));
-            collect(child, path, place, out);
-            place.0.pop();
+            walk.place
+                .0
+                .push((translate.value(), *axis, c, s, scale.value));
+            collect(child, walk, out);
+            walk.place.0.pop();
         }
         Sdf::Union(children)
         | Sdf::Intersection(children)
         | Sdf::Difference(children)
         | Sdf::SmoothUnion { children, .. } => {
+            let subtracts = matches!(node, Sdf::Difference(_));
             for (i, c) in children.iter().enumerate() {
-                path.push(i);
-                collect(c, path, place, out);
-                path.pop();
+                let flip = subtracts && i > 0;
+                walk.path.push(i);
+                walk.inverted ^= flip;
+                collect(c, walk, out);
+                walk.inverted ^= flip;
+                walk.path.pop();
             }
         }
         Sdf::Box {
@@ -248,10 +269,11 @@ fn collect(node: &Sdf, path: &mut Vec<usize>, place: &mut Placement, out: &mut V
                     along[k] = h[k];
                     out.push(CreaseEdge {
                         curve: EdgeCurve::Segment {
-                            a: place.point(mid - along),
-                            b: place.point(mid + along),
+                            a: walk.place.point(mid - along),
+                            b: walk.place.point(mid + along),
                         },
-                        path: path.clone(),
+                        path: walk.path.clone(),
+                        inverted: walk.inverted,
                         faces: [
                             Face::BoxSide {
                                 axis: i,
@@ -280,12 +302,13 @@ fn collect(node: &Sdf, path: &mut Vec<usize>, place: &mut Placement, out: &mut V
                 let centre = center.value() + *axis * (s * half_height.value);
                 out.push(CreaseEdge {
                     curve: EdgeCurve::Circle {
-                        centre: place.point(centre),
-                        radius: radius.value * place.scale(),
-                        e1: place.vector(e1).normalize_or_zero(),
-                        e2: place.vector(e2).normalize_or_zero(),
+                        centre: walk.place.point(centre),
+                        radius: radius.value * walk.place.scale(),
+                        e1: walk.place.vector(e1).normalize_or_zero(),
+                        e2: walk.place.vector(e2).normalize_or_zero(),
                     },
-                    path: path.clone(),
+                    path: walk.path.clone(),
+                    inverted: walk.inverted,
                     faces: [Face::CylinderSide, Face::CylinderCap { positive }],
                 });
             }
@@ -363,6 +386,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A box subtracted from a sphere leaves concave edges (inverted); subtracting twice restores them.
+    #[test]
+    fn subtracted_edges_are_inverted() {
+        let ball = Sdf::sphere([0.0; 3], 1.0);
+        let notch = Sdf::Difference(vec![ball.clone(), sharp_box()]);
+        assert!(
+            notch
+                .crease_edges()
+                .iter()
+                .all(|e| e.inverted && e.path == [1])
+        );
+        let twice = Sdf::Difference(vec![ball.clone(), notch]);
+        assert!(
+            twice
+                .crease_edges()
+                .iter()
+                .all(|e| !e.inverted && e.path == [1, 1])
+        );
+        let kept = Sdf::Difference(vec![sharp_box(), ball]);
+        assert!(
+            kept.crease_edges()
+                .iter()
+                .all(|e| !e.inverted && e.path == [0])
+        );
     }
 
     #[test]

@@ -21,7 +21,8 @@
 //! traced both ways from `x_B` pushed off the edge along its faces' mean normal; its first hits are
 //! `x_D` (along `ω`) and `x_S` (along `−ω`): one oriented segment per sample, whose direction is `ω`.
 //! Unless the faces lie on opposite sides of the line ([`CreaseSegment::is_boundary`]) the sample
-//! contributes nothing. It contributes eq. (2) of [`super::secondary`] with the crease's change of
+//! contributes nothing, nor on a concave edge ([`crate::sdf::CreaseEdge::inverted`]: every line through
+//! it enters the solid on both sides). It contributes eq. (2) of [`super::secondary`] with the crease's change of
 //! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an
 //! edge that are not on the shape's surface (inside another CSG child, or cut away) contribute 0.
 
@@ -128,6 +129,10 @@ fn sample<S: Directions>(
     let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {
         return;
     };
+    // A concave edge (inside a subtracted child) blocks every line through it on both sides.
+    if edge.inverted {
+        return;
+    }
     let shape = &scene.shapes[m];
     let x_b = pt.x;
     let Some((w, pdf)) = sample_direction(scene, x_b, sampler) else {

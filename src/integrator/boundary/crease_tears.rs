@@ -114,8 +114,10 @@ fn sample<S: Directions>(
     let grads = [0, 1].map(|f| face_gradient(shape, edge, f, x));
     let depth = scene.integrator.max_scatter();
     let frame = scene.camera.frame::<f32>();
+    // The surface's outward normal: the face's, reversed inside a subtracted child.
+    let outward = if edge.inverted { -1.0 } else { 1.0 };
     for f in 0..2 {
-        let Some(n) = grads[f].try_normalize() else {
+        let Some(n) = (grads[f] * outward).try_normalize() else {
             continue;
         };
         // Across the edge in face f's tangent plane, out of the face's region (towards the other
