@@ -373,8 +373,8 @@ fn sample<S: Directions>(
         return;
     };
     let v = ex * n_img.x + ey * n_img.y;
-    // Each side: its radiance and its parametrisation's film velocity along n_img.
-    // The sides' rays pass `delta` from the edge (at least four camera-ray tolerances), in pixels.
+    // Each side: its radiance and its parametrisation's film velocity along n_img, seen along a camera
+    // ray passing `delta` from the edge (at least four camera-ray tolerances).
     let z = q.dot(frame.forward.into());
     let off_pixels = (delta * frame.focal / z).max(BACKGROUND_OFFSET_PIXELS);
     let mut side = |sign: f32| -> Option<(glam::Vec3, S)> {
