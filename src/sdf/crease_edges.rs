@@ -211,6 +211,14 @@ impl Sdf {
     }
 }
 
+impl Sdf {
+    /// `∇F` of [`Sdf::face_value`] at `p` (this node's coordinates, `f32`, by forward-mode AD); zero
+    /// when the face does not evaluate.
+    pub fn face_gradient(&self, path: &[usize], face: Face, p: glam::Vec3) -> glam::Vec3 {
+        super::gradient_by_ad(p, |q| self.face_value(path, face, q))
+    }
+}
+
 /// Where [`collect`] is in the tree: the CSG children taken, the transforms above, and whether the
 /// solid is inverted (inside a subtracted child).
 #[derive(Default)]

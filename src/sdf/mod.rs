@@ -276,15 +276,7 @@ impl Sdf {
 
     /// `∇φ(p)` by forward-mode AD, for every node (the reference the fast paths are tested against).
     pub fn ad_gradient(&self, p: glam::Vec3) -> glam::Vec3 {
-        let v = self.eval(Vec3::new(
-            DualVec3::from_re(p.x).derivative(0),
-            DualVec3::from_re(p.y).derivative(1),
-            DualVec3::from_re(p.z).derivative(2),
-        ));
-        match v.eps.0 {
-            Some(g) => glam::Vec3::new(g[0], g[1], g[2]),
-            None => glam::Vec3::ZERO,
-        }
+        gradient_by_ad(p, |q| Some(self.eval(q)))
     }
 
     /// Outward unit normal `∇φ/|∇φ|`; `+z` where the gradient vanishes.
@@ -470,6 +462,23 @@ impl Sdf {
             Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.is_piecewise_flat(),
             _ => false,
         }
+    }
+}
+
+/// The spatial gradient at `p` of a function evaluated in [`DualVec3`] (forward-mode AD); zero where
+/// it does not evaluate or carries no derivative.
+pub(super) fn gradient_by_ad(
+    p: glam::Vec3,
+    f: impl FnOnce(Vec3<DualVec3>) -> Option<DualVec3>,
+) -> glam::Vec3 {
+    let q = Vec3::new(
+        DualVec3::from_re(p.x).derivative(0),
+        DualVec3::from_re(p.y).derivative(1),
+        DualVec3::from_re(p.z).derivative(2),
+    );
+    match f(q).and_then(|v| v.eps.0) {
+        Some(g) => glam::Vec3::new(g[0], g[1], g[2]),
+        None => glam::Vec3::ZERO,
     }
 }
 

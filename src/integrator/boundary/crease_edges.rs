@@ -70,7 +70,7 @@ use crate::integrator::options::RenderOptions;
 use crate::integrator::path::{PathRecord, TraceCounters, contribution, detached, trace_path};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
-use crate::scalar::{Directions, DualVec3, Scalar};
+use crate::scalar::{Directions, Scalar};
 use crate::scene::{Scene, Shape};
 use crate::sdf::{CreaseEdge, EdgeCurve};
 
@@ -97,7 +97,7 @@ pub struct EdgePoint {
     pub tangent: glam::Vec3,
     /// Index of the shape in [`Scene::shapes`].
     pub shape: usize,
-    /// Index of the edge in [`CreaseEdges::edge`].
+    /// Index of the edge among the [`CreaseEdges`]' edges.
     pub edge: usize,
 }
 
@@ -188,11 +188,6 @@ impl CreaseEdges {
         self.cumulative.last().copied().unwrap_or(0.0)
     }
 
-    /// Edge `i` (its shape's index and the edge in the shape's coordinates).
-    pub fn edge(&self, i: usize) -> &(usize, CreaseEdge) {
-        &self.edges[i]
-    }
-
     /// [`Self::sample`] with two numbers of `sampler`, and the point's shape index and edge; `None` when
     /// empty or when the point is not on the shape's surface ([`on_surface`]), where every crease
     /// term's integrand is 0.
@@ -235,27 +230,16 @@ pub(crate) fn on_surface(scene: &Scene, shape: &Shape, x: glam::Vec3) -> bool {
     phi <= scene.trace.eps_at_point(x)
 }
 
-/// `∇F` of a face function of `edge` on `shape` at the world point `x` (f32, by forward-mode AD).
+/// `∇F` of face `face` (0 or 1) of `edge` on `shape` at the world point `x` ([`crate::sdf::Sdf::face_gradient`]).
 pub(crate) fn face_gradient(
     shape: &Shape,
     edge: &CreaseEdge,
     face: usize,
     x: glam::Vec3,
 ) -> glam::Vec3 {
-    let p = x - shape.translate.value();
-    let p = Vec3::new(
-        DualVec3::from_re(p.x).derivative(0),
-        DualVec3::from_re(p.y).derivative(1),
-        DualVec3::from_re(p.z).derivative(2),
-    );
-    match shape
+    shape
         .sdf
-        .face_value(&edge.path, edge.faces[face], p)
-        .and_then(|v| v.eps.0)
-    {
-        Some(g) => glam::Vec3::new(g[0], g[1], g[2]),
-        None => glam::Vec3::ZERO,
-    }
+        .face_gradient(&edge.path, edge.faces[face], x - shape.translate.value())
 }
 
 /// The edge point `x_C` moved with the lifted parameters (see the [module docs](self)): `x_C` minus the

@@ -45,8 +45,7 @@
 //! oriented towards the clear side (`c·n_∂ > 0`) the curve moves by `V_∂ = −∂πh / (t_B c·n_∂)` along
 //! `n_∂`, the convention of [`super::boundary_velocity`] (`V_∂ > 0` grows the blocked side).
 
-use super::segment::{guarded_ratio, sin_to_section};
-use crate::integrator::boundary::crease_edges::face_gradient;
+use super::segment::{curve_normal_towards, guarded_ratio, sin_to_section};
 use crate::math::Vec3;
 use crate::scalar::Scalar;
 use crate::scene::Shape;
@@ -72,18 +71,15 @@ pub struct CreaseSegment {
 }
 
 impl CreaseSegment {
-    /// The segment from `x_s` (normal `n_s`) past `x_b` on `edge` of `shape` (unit edge tangent
-    /// `tangent`) to `x_d` (normal `n_d`); `None` if the points are not distinct.
-    #[allow(clippy::too_many_arguments)]
+    /// The segment from `x_s` (normal `n_s`) past the edge point `x_b` (unit edge tangent `tangent`,
+    /// face gradients `grads` there: [`crate::integrator::boundary::crease_edges::face_gradient`]) to
+    /// `x_d` (normal `n_d`); `None` if the points are not distinct.
     pub fn new(
-        shape: &Shape,
-        edge: &CreaseEdge,
-        x_s: glam::Vec3,
-        x_b: glam::Vec3,
-        x_d: glam::Vec3,
+        (x_s, x_b, x_d): (glam::Vec3, glam::Vec3, glam::Vec3),
         n_s: glam::Vec3,
         n_d: glam::Vec3,
         tangent: glam::Vec3,
+        grads: [glam::Vec3; 2],
     ) -> Option<Self> {
         (x_b - x_s).try_normalize()?;
         (x_d - x_b).try_normalize()?;
@@ -94,7 +90,7 @@ impl CreaseSegment {
             n_s,
             n_d,
             tangent,
-            grads: [0, 1].map(|f| face_gradient(shape, edge, f, x_b)),
+            grads,
         })
     }
 
@@ -171,14 +167,7 @@ impl CreaseSegment {
     /// The unit curve normal `n_∂` at `x_D`, towards the clear side (`c·n_∂ > 0`); `None` where the
     /// segment grazes `x_D`'s surface.
     pub fn curve_normal(&self) -> Option<glam::Vec3> {
-        let (w, e) = (self.omega(), self.across());
-        let c = (w * self.n_d.dot(e) - e * self.n_d.dot(w)).try_normalize()?;
-        let m = self.n_d.cross(c).try_normalize()?;
-        let s = m.dot(self.clearing());
-        if s == 0.0 || !s.is_finite() {
-            return None;
-        }
-        Some(if s > 0.0 { m } else { -m })
+        curve_normal_towards(self.n_d, self.omega(), self.across(), self.clearing())
     }
 
     /// `V_∂` at `x_D` along [`Self::curve_normal`] by AD (module docs), with the attached `x_s`, `x_d`
@@ -283,8 +272,10 @@ mod tests {
                 x_s + w * ((plane - x_s.y) / w.y)
             };
             let x_d = through(x_s, x_b);
-            let seg =
-                CreaseSegment::new(&shape, &edge, x_s, x_b, x_d, n_s, n_d, glam::Vec3::Z).unwrap();
+            let grads = [0, 1].map(|f| {
+                crate::integrator::boundary::crease_edges::face_gradient(&shape, &edge, f, x_b)
+            });
+            let seg = CreaseSegment::new((x_s, x_b, x_d), n_s, n_d, glam::Vec3::Z, grads).unwrap();
             assert!(seg.is_boundary(), "case {k}");
             let v: Dual32 = seg.velocity(&shape, &edge, Vec3::constant(x_s), Vec3::constant(x_d));
             // The moved edge point's shadow: the edge is x = 0.5 + δ(c_x + h_x), y = 0.5 + δ c_y.

@@ -162,6 +162,6 @@ fn sample<S: Directions>(
         }
         end => end,
     });
-    let occluder = Occluder::Crease(m, edge, pt.tangent);
+    let occluder = Occluder::Crease(m, edge, pt.tangent, grads);
     ctx.segment(occluder, (x_b, o), &s_end, &d_end, weight, splats, counters);
 }

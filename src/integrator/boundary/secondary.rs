@@ -354,9 +354,9 @@ pub(crate) struct Context<'a> {
 pub(crate) enum Occluder<'a> {
     /// A smooth silhouette of shape `m`: the line is tangent there ([`BoundarySegment`]).
     Silhouette(usize),
-    /// A crease edge of shape `m` (the edge in the shape's coordinates, its unit tangent at `x_B`):
-    /// the line passes the edge ([`CreaseSegment`]).
-    Crease(usize, &'a CreaseEdge, glam::Vec3),
+    /// A crease edge of shape `m` (the edge in the shape's coordinates, its unit tangent and its faces'
+    /// gradients at `x_B`): the line passes the edge ([`CreaseSegment`]).
+    Crease(usize, &'a CreaseEdge, glam::Vec3, [glam::Vec3; 2]),
 }
 
 /// A boundary segment's geometry, with what its velocity is evaluated on.
@@ -383,9 +383,9 @@ impl<'a> Occluder<'a> {
                 let seg = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d)?;
                 Blocked::Silhouette(shape, seg)
             }
-            Occluder::Crease(m, edge, tangent) => {
+            Occluder::Crease(m, edge, tangent, grads) => {
                 let shape = &scene.shapes[m];
-                let seg = CreaseSegment::new(shape, edge, x_s, x_b, x_d, n_s, n_d, tangent)?;
+                let seg = CreaseSegment::new((x_s, x_b, x_d), n_s, n_d, tangent, grads)?;
                 Blocked::Crease(shape, edge, seg)
             }
         })

@@ -251,15 +251,7 @@ impl BoundarySegment {
     /// curve, towards the side where the segment clears `M`); `None` where the segment grazes `x_D`'s
     /// surface (no curve direction).
     pub fn curve_normal(&self) -> Option<glam::Vec3> {
-        let (w, e) = (self.omega(), self.across());
-        // The curve's tangent: the direction in span(ω, e) tangent to x_D's surface.
-        let c = (w * self.n_d.dot(e) - e * self.n_d.dot(w)).try_normalize()?;
-        let m = self.n_d.cross(c).try_normalize()?;
-        let s = m.dot(self.n_b);
-        if s == 0.0 || !s.is_finite() {
-            return None;
-        }
-        Some(if s > 0.0 { m } else { -m })
+        curve_normal_towards(self.n_d, self.omega(), self.across(), self.n_b)
     }
 }
 
@@ -318,6 +310,26 @@ pub fn boundary_velocity<S: Scalar>(
     let x = x_s + (x_d - x_s) * S::constant(t_b);
     let h = shape.eval(x);
     -(h - h.detach()) / rate
+}
+
+/// The unit normal at `x_D` (surface normal `n_d`) of the discontinuity curve whose tangent lies in
+/// `span(w, e)` (`w` the segment's direction, `e` across it), within `x_D`'s tangent plane and oriented
+/// so that its dot product with `clear` is positive (the side where the segment clears the occluder);
+/// `None` where the segment grazes `x_D`'s surface or the orientation is undecided.
+pub(crate) fn curve_normal_towards(
+    n_d: glam::Vec3,
+    w: glam::Vec3,
+    e: glam::Vec3,
+    clear: glam::Vec3,
+) -> Option<glam::Vec3> {
+    // The curve's tangent: the direction in span(w, e) tangent to x_D's surface.
+    let c = (w * n_d.dot(e) - e * n_d.dot(w)).try_normalize()?;
+    let m = n_d.cross(c).try_normalize()?;
+    let s = m.dot(clear);
+    if s == 0.0 || !s.is_finite() {
+        return None;
+    }
+    Some(if s > 0.0 { m } else { -m })
 }
 
 /// Sine of the angle between the line direction `w` and the section of a surface (unit normal `n`) by
