@@ -11,10 +11,10 @@
 //! The shape's rigid `translate` is honoured by evaluating through [`Shape::eval`] in world coordinates.
 
 use crate::error::{Error, Result};
+use crate::integrator::implicit_curve::octree_leaves;
 use crate::math::{Aabb, Vec3};
 use crate::scene::Shape;
 use crate::sdf::interval::{Interval, IntervalGrad};
-use rayon::prelude::*;
 
 /// What interval arithmetic proves about a box.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -76,22 +76,7 @@ pub fn silhouette_boxes(
             shape.name
         )));
     }
-    let mut leaves = Vec::new();
-    let mut frontier = vec![root];
-    for depth in 0..=max_depth {
-        let kept: Vec<Aabb> = frontier
-            .par_iter()
-            .filter(|b| classify_box(shape, eye, b) == BoxClass::Kept)
-            .copied()
-            .collect();
-        let (leaf, inner): (Vec<Aabb>, Vec<Aabb>) = kept
-            .into_iter()
-            .partition(|b| depth == max_depth || b.extent().max_element() <= min_size);
-        leaves.extend(leaf);
-        frontier = inner.iter().flat_map(Aabb::octants).collect();
-        if frontier.is_empty() {
-            break;
-        }
-    }
-    Ok(leaves)
+    Ok(octree_leaves(root, max_depth, min_size, |b| {
+        classify_box(shape, eye, b) == BoxClass::Kept
+    }))
 }
