@@ -56,7 +56,6 @@ pub mod diff;
 pub mod driver;
 pub mod fd;
 pub mod gradient;
-pub mod implicit_curve;
 pub mod options;
 pub mod path;
 pub mod primal;

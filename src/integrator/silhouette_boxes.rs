@@ -11,7 +11,7 @@
 //! The shape's rigid `translate` is honoured by evaluating through [`Shape::eval`] in world coordinates.
 
 use crate::error::{Error, Result};
-use crate::integrator::implicit_curve::octree_leaves;
+use crate::math::implicit_curve::octree_leaves;
 use crate::math::{Aabb, Vec3};
 use crate::scene::Shape;
 use crate::sdf::interval::{Interval, IntervalGrad};

@@ -5,7 +5,7 @@
 //! supplemental §2); its gradients are `∇φ` and `∇ψ = H(c − x) − ∇φ`, `H` the Hessian of `φ`. Where they are
 //! independent the curve is smooth with unit tangent `T = ∇φ × ∇ψ / |∇φ × ∇ψ|`.
 //!
-//! **Extraction and sampling** are those of any curve `{f = 0, g = 0}` ([`super::implicit_curve`], whose
+//! **Extraction and sampling** are those of any curve `{f = 0, g = 0}` ([`crate::math::implicit_curve`], whose
 //! module notes state the cases and the density), with `f = φ`, `g = ψ` and boxes culled by
 //! [`classify_box`]: [`silhouette_boxes`] gives boxes certified to hold every curve point.
 //!
@@ -20,15 +20,15 @@
 //! the polyline segment it came from and `L` the polyline's total length ([`CurveSample::pdf`]).
 
 use crate::error::Result;
-use crate::integrator::implicit_curve::{CurveFunctions, extract_polyline, project_from_chord};
 use crate::integrator::silhouette_boxes::{BoxClass, classify_box, silhouette_boxes};
 use crate::math::Aabb;
+use crate::math::implicit_curve::{CurveFunctions, extract_polyline, project_from_chord};
 use crate::scalar::Param3;
 use crate::scene::Shape;
 use crate::sdf::Sdf;
 use glam::Vec3;
 
-pub use crate::integrator::implicit_curve::{CurveOptions, ExtractStats};
+pub use crate::math::implicit_curve::{CurveOptions, ExtractStats};
 
 /// The extracted silhouette: a polyline whose vertices lie on the curve.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,8 +1,10 @@
-//! Small math: the generic [`Vec3`], axis-aligned boxes, orthonormal frames and sampling warps.
+//! Small math: the generic [`Vec3`], axis-aligned boxes, orthonormal frames, sampling warps, and curves
+//! where two implicit functions vanish ([`implicit_curve`]).
 //! Everything except [`Vec3`] is `f32`-only and uses glam.
 
 mod aabb;
 mod frame;
+pub mod implicit_curve;
 pub mod sampling;
 mod vec3;
 

@@ -257,8 +257,9 @@ impl Scene {
     }
 
     /// The crease edges the estimators sample ([`Sdf::crease_edges`]: sharp boxes' edges, sharp
-    /// cylinders' rims), as `(shape index, edge)` with the edge in the shape's own coordinates (add its
-    /// `translate` for world coordinates).
+    /// cylinders' rims, and the chords of the curves where hard CSG children cross), as
+    /// `(shape index, edge)` with the edge in the shape's own coordinates (add its `translate` for world
+    /// coordinates). Extracts the CSG crossings: cost grows with their number.
     pub fn creased_shapes(&self) -> Vec<(usize, crate::sdf::CreaseEdge)> {
         self.shapes
             .iter()
@@ -267,8 +268,13 @@ impl Scene {
             .collect()
     }
 
+    /// Whether any shape has crease edges ([`Sdf::has_crease_edges`]), without extracting them.
+    pub fn has_crease_edges(&self) -> bool {
+        self.shapes.iter().any(|s| s.sdf.has_crease_edges())
+    }
+
     /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, reason)`
-    /// ([`Sdf::unsampled_creases`]: hard CSG creases): derivatives that move those curves (any
+    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children): derivatives that move those curves (any
     /// geometric parameter of the scene, through the camera, the lights or the shape) miss those terms.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
         self.shapes
@@ -475,7 +481,8 @@ mod tests {
         let edges = scene.creased_shapes();
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|(i, _)| *i == 1));
-        // The sharp box's edges are sampled; a hard CSG crease is not.
+        // The sharp box's edges are sampled; so are bounded hard CSG creases (as chords of the
+        // extracted curve), but not those of unbounded children.
         assert!(scene.unsampled_creases().is_empty());
         scene.shapes.push(Shape::new(
             "lens",
@@ -485,11 +492,38 @@ mod tests {
             ]),
             bsdf,
         ));
+        assert!(scene.unsampled_creases().is_empty());
+        let edges = scene.creased_shapes();
+        let chords = edges.iter().filter(|(i, _)| *i == 2);
+        use crate::sdf::EdgeCurve;
+        assert!(chords.clone().count() > 12);
+        assert!(
+            chords
+                .clone()
+                .all(|(_, e)| matches!(e.curve, EdgeCurve::Chord { .. }))
+        );
+        let length: f32 = chords.map(|(_, e)| e.curve.length()).sum();
+        let exact = std::f32::consts::TAU * (1.0f32 - 0.25f32 * 0.25).sqrt();
+        assert!((length / exact - 1.0).abs() < 1e-3, "{length} vs {exact}");
+        scene.shapes.push(Shape::new(
+            "wedge",
+            Sdf::Intersection(vec![
+                Sdf::Plane {
+                    normal: glam::Vec3::Y,
+                    offset: 0.0.into(),
+                },
+                Sdf::Plane {
+                    normal: glam::Vec3::X,
+                    offset: 0.0.into(),
+                },
+            ]),
+            bsdf,
+        ));
         assert_eq!(
             scene.unsampled_creases(),
             vec![(
-                "lens".to_string(),
-                "hard intersection of children whose surfaces cross".to_string()
+                "wedge".to_string(),
+                "hard intersection of unbounded children (planes) whose surfaces cross".to_string()
             )]
         );
     }

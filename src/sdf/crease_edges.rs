@@ -15,8 +15,10 @@
 //! ([`CreaseEdge::inverted`]). Creases where two CSG children cross are not listed
 //! here ([`Sdf::creases`] still reports them).
 
-use super::{Sdf, transform};
-use crate::math::Vec3;
+use super::creases::crossing_pairs;
+use super::{CrossingCrease, Sdf, transform};
+use crate::math::implicit_curve::CurveOptions;
+use crate::math::{Aabb, Vec3};
 use crate::scalar::Scalar;
 
 /// One face of a primitive next to a crease edge.
@@ -36,6 +38,14 @@ pub enum Face {
         /// Whether the cap is on the positive side of the axis.
         positive: bool,
     },
+    /// Child `index` of a hard CSG node, `F = φ_child` (or `−φ_child` when `negated`): a face of the
+    /// crease where two children cross ([`super::CrossingCrease`]).
+    Child {
+        /// Index of the child.
+        index: usize,
+        /// Whether `F = −φ_child`.
+        negated: bool,
+    },
 }
 
 /// The shape of a crease edge, in the coordinates of the tree it was listed from.
@@ -46,6 +56,15 @@ pub enum EdgeCurve {
         /// First end.
         a: glam::Vec3,
         /// Second end.
+        b: glam::Vec3,
+    },
+    /// A chord between two points of a crease not known in closed form (where two CSG children
+    /// cross, [`super::CrossingCrease`]): samples on it are projected onto the crease
+    /// ([`Sdf::crease_point`]).
+    Chord {
+        /// First end (on the crease).
+        a: glam::Vec3,
+        /// Second end (on the crease).
         b: glam::Vec3,
     },
     /// The circle `centre + radius (cos θ e1 + sin θ e2)`, `e1 ⊥ e2` unit vectors.
@@ -65,15 +84,18 @@ impl EdgeCurve {
     /// Length (scene units).
     pub fn length(&self) -> f32 {
         match self {
-            EdgeCurve::Segment { a, b } => (*b - *a).length(),
+            EdgeCurve::Segment { a, b } | EdgeCurve::Chord { a, b } => (*b - *a).length(),
             EdgeCurve::Circle { radius, .. } => std::f32::consts::TAU * radius,
         }
     }
 
-    /// The point at fraction `u ∈ [0, 1)` of the length, and the unit tangent there.
+    /// The point at fraction `u ∈ [0, 1)` of the length, and the unit tangent there (of the chord, for a
+    /// [`EdgeCurve::Chord`]).
     pub fn at(&self, u: f32) -> (glam::Vec3, glam::Vec3) {
         match *self {
-            EdgeCurve::Segment { a, b } => (a + (b - a) * u, (b - a).normalize_or_zero()),
+            EdgeCurve::Segment { a, b } | EdgeCurve::Chord { a, b } => {
+                (a + (b - a) * u, (b - a).normalize_or_zero())
+            }
             EdgeCurve::Circle {
                 centre,
                 radius,
@@ -129,7 +151,30 @@ impl Sdf {
     /// The crease edges of the sharp boxes and cylinders in this tree (see the [module docs](self)), in
     /// this node's coordinates. Empty when there are none.
     pub fn crease_edges(&self) -> Vec<CreaseEdge> {
-        let mut out = Vec::new();
+        let found = self.find_creases();
+        let mut edges = found.edges;
+        for crossing in &found.crossings {
+            edges.extend(crossing.chords(self, &CurveOptions::default()));
+        }
+        edges
+    }
+
+    /// Whether this tree has crease edges ([`Sdf::crease_edges`] not empty, or only curves too small
+    /// for extraction to find), without extracting the crossings.
+    pub fn has_crease_edges(&self) -> bool {
+        let found = self.find_creases();
+        !(found.edges.is_empty() && found.crossings.is_empty())
+    }
+
+    /// The creases where two children of a hard CSG node cross, in this node's coordinates, before
+    /// extraction.
+    pub fn crossing_creases(&self) -> Vec<CrossingCrease> {
+        self.find_creases().crossings
+    }
+
+    /// The primitives' edges in closed form and the CSG crossings still to be extracted.
+    fn find_creases(&self) -> Found {
+        let mut out = Found::default();
         collect(self, &mut Walk::default(), &mut out);
         out
     }
@@ -156,6 +201,16 @@ impl Sdf {
                     transform::rotate(p - translate.get::<S>(), *axis, theta.cos(), -theta.sin());
                 // The zero set is what matters: the child's value is not rescaled.
                 child.face_value(path, face, q * scale.get::<S>().recip())
+            }
+            (
+                Sdf::Union(children)
+                | Sdf::Intersection(children)
+                | Sdf::Difference(children)
+                | Sdf::SmoothUnion { children, .. },
+                Face::Child { index, negated },
+            ) if path.is_empty() => {
+                let v = children.get(index)?.eval(p);
+                Some(if negated { -v } else { v })
             }
             (
                 Sdf::Union(children)
@@ -203,7 +258,7 @@ impl Sdf {
                     Face::CylinderCap { positive } => {
                         Some(if positive { h } else { -h } - half_height.get::<S>())
                     }
-                    Face::BoxSide { .. } => None,
+                    Face::BoxSide { .. } | Face::Child { .. } => None,
                 }
             }
             _ => None,
@@ -228,7 +283,14 @@ struct Walk {
     inverted: bool,
 }
 
-fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
+/// What [`collect`] finds.
+#[derive(Default)]
+struct Found {
+    edges: Vec<CreaseEdge>,
+    crossings: Vec<CrossingCrease>,
+}
+
+fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
     match node {
         Sdf::Named { child, .. } => collect(child, walk, out),
         Sdf::Transform {
@@ -251,6 +313,7 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
         | Sdf::Difference(children)
         | Sdf::SmoothUnion { children, .. } => {
             let subtracts = matches!(node, Sdf::Difference(_));
+            push_crossings(node, walk, &mut out.crossings);
             for (i, c) in children.iter().enumerate() {
                 let flip = subtracts && i > 0;
                 walk.path.push(i);
@@ -275,7 +338,7 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
                     mid[j] += sj * h[j];
                     let mut along = glam::Vec3::ZERO;
                     along[k] = h[k];
-                    out.push(CreaseEdge {
+                    out.edges.push(CreaseEdge {
                         curve: EdgeCurve::Segment {
                             a: walk.place.point(mid - along),
                             b: walk.place.point(mid + along),
@@ -308,7 +371,7 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
             for positive in [true, false] {
                 let s = if positive { 1.0 } else { -1.0 };
                 let centre = center.value() + *axis * (s * half_height.value);
-                out.push(CreaseEdge {
+                out.edges.push(CreaseEdge {
                     curve: EdgeCurve::Circle {
                         centre: walk.place.point(centre),
                         radius: radius.value * walk.place.scale(),
@@ -322,6 +385,45 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Vec<CreaseEdge>) {
             }
         }
         _ => {}
+    }
+}
+
+/// The crossings of `node`'s children if it is a hard CSG node (see [`CrossingCrease`] for the faces'
+/// signs): each pair whose surfaces may meet inside a bounded common box.
+fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Vec<CrossingCrease>) {
+    // Locally the solid is {F_a < 0 and F_b < 0} (convex) or, inverted, its complement.
+    let (children, negate, inverted): (&[Sdf], fn(usize) -> bool, bool) = match node {
+        Sdf::Intersection(c) => (c, |_| false, false),
+        Sdf::Difference(c) => (c, |i| i > 0, false),
+        Sdf::Union(c) => (c, |_| true, true),
+        Sdf::SmoothUnion { children, k } if k.value <= 0.0 => (children, |_| true, true),
+        _ => return,
+    };
+    for (i, j, common) in crossing_pairs(children) {
+        if !common.is_finite() {
+            continue;
+        }
+        let corners = (0..8).map(|c| {
+            let pick = |bit: usize, k: usize| {
+                if c & bit == 0 {
+                    common.min[k]
+                } else {
+                    common.max[k]
+                }
+            };
+            walk.place
+                .point(glam::Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2)))
+        });
+        let bounds = corners.fold(Aabb::EMPTY, |b, p| b.union(&Aabb::new(p, p)));
+        out.push(CrossingCrease {
+            path: walk.path.clone(),
+            faces: [i, j].map(|index| Face::Child {
+                index,
+                negated: negate(index),
+            }),
+            inverted: walk.inverted ^ inverted,
+            bounds,
+        });
     }
 }
 
@@ -397,28 +499,62 @@ mod tests {
     }
 
     /// A box subtracted from a sphere leaves concave edges (inverted); subtracting twice restores them.
+    /// The crossing of the ball and the box is convex (the solid lies outside the box there).
     #[test]
     fn subtracted_edges_are_inverted() {
         let ball = Sdf::sphere([0.0; 3], 1.0);
+        let box_edges = |sdf: &Sdf| -> Vec<CreaseEdge> {
+            let edges = sdf.crease_edges();
+            edges
+                .into_iter()
+                .filter(|e| !matches!(e.faces[0], Face::Child { .. }))
+                .collect()
+        };
         let notch = Sdf::Difference(vec![ball.clone(), sharp_box()]);
-        assert!(
-            notch
-                .crease_edges()
-                .iter()
-                .all(|e| e.inverted && e.path == [1])
+        let edges = box_edges(&notch);
+        assert_eq!(edges.len(), 12);
+        assert!(edges.iter().all(|e| e.inverted && e.path == [1]));
+        let crossings = notch.crossing_creases();
+        assert_eq!(crossings.len(), 1);
+        assert!(!crossings[0].inverted && crossings[0].path.is_empty());
+        let faces = crossings[0].faces;
+        assert_eq!(
+            faces,
+            [
+                Face::Child {
+                    index: 0,
+                    negated: false
+                },
+                Face::Child {
+                    index: 1,
+                    negated: true
+                }
+            ]
         );
         let twice = Sdf::Difference(vec![ball.clone(), notch]);
         assert!(
-            twice
-                .crease_edges()
+            box_edges(&twice)
                 .iter()
                 .all(|e| !e.inverted && e.path == [1, 1])
         );
-        let kept = Sdf::Difference(vec![sharp_box(), ball]);
+        // The notch's own crossing, inside the subtracted child, is concave.
+        let inner = twice.crossing_creases();
+        assert!(inner.iter().any(|c| c.path == [1] && c.inverted));
+        let kept = Sdf::Difference(vec![sharp_box(), ball.clone()]);
         assert!(
-            kept.crease_edges()
+            box_edges(&kept)
                 .iter()
                 .all(|e| !e.inverted && e.path == [0])
+        );
+        // A hard union's crossing is concave, with both children negated.
+        let union = Sdf::Union(vec![ball, sharp_box()]);
+        let c = union.crossing_creases();
+        assert_eq!(c.len(), 1);
+        assert!(c[0].inverted);
+        assert!(
+            (c[0].faces)
+                .iter()
+                .all(|f| matches!(f, Face::Child { negated: true, .. }))
         );
     }
 

@@ -95,19 +95,40 @@ impl Sdf {
     }
 }
 
-/// The children's own creases, then one reason for the node if two children's surfaces may cross.
+/// The children's own creases, then one reason for the node if two children's surfaces may cross
+/// (with `unsampled`, only where they may cross in an unbounded region, which extraction cannot
+/// search).
 fn hard_csg(children: &[Sdf], op: &str, unsampled: bool, out: &mut Vec<String>) {
     for c in children {
         c.collect_creases(unsampled, out);
     }
-    let crossing = (0..children.len())
-        .any(|i| (i + 1..children.len()).any(|j| surfaces_may_meet(&children[i], &children[j])));
-    if crossing {
-        let r = format!("hard {op} of children whose surfaces cross");
-        if !out.contains(&r) {
-            out.push(r);
+    let pairs = crossing_pairs(children);
+    let r = if unsampled {
+        (pairs.iter().any(|(.., common)| !common.is_finite()))
+            .then(|| format!("hard {op} of unbounded children (planes) whose surfaces cross"))
+    } else {
+        (!pairs.is_empty()).then(|| format!("hard {op} of children whose surfaces cross"))
+    };
+    if let Some(r) = r
+        && !out.contains(&r)
+    {
+        out.push(r);
+    }
+}
+
+/// The pairs `(i, j)`, `i < j`, of children whose surfaces may cross ([`surfaces_may_meet`]), with their
+/// common box (unbounded for two unbounded children).
+pub(super) fn crossing_pairs(children: &[Sdf]) -> Vec<(usize, usize, Aabb)> {
+    let mut pairs = Vec::new();
+    for i in 0..children.len() {
+        for j in i + 1..children.len() {
+            if surfaces_may_meet(&children[i], &children[j]) {
+                let common = children[i].bounds().intersection(&children[j].bounds());
+                pairs.push((i, j, common));
+            }
         }
     }
+    pairs
 }
 
 /// Whether the surfaces `φ_a = 0` and `φ_b = 0` (same coordinates) may have a common point: `false` is

@@ -29,6 +29,7 @@
 mod bake;
 mod crease_edges;
 mod creases;
+mod crossing_creases;
 mod csg;
 mod empty_space;
 mod grid;
@@ -43,6 +44,7 @@ mod validate;
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
+pub use crossing_creases::CrossingCrease;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};

@@ -99,6 +99,9 @@ pub struct EdgePoint {
     pub shape: usize,
     /// Index of the edge among the [`CreaseEdges`]' edges.
     pub edge: usize,
+    /// `1/p`, `p` the density per unit length of the point (`Λ` for a segment or circle,
+    /// `Λ/|T·t|` for a point projected from a chord: [`crate::sdf::Sdf::crease_point`]).
+    pub weight: f32,
 }
 
 /// Crease edges of the scene's shapes (those that may project onto the film, or all), for sampling by
@@ -136,6 +139,13 @@ impl CreaseEdges {
                     None => Some((a + t, b + t)),
                 }
                 .map(|(a, b)| EdgeCurve::Segment { a, b }),
+                // Kept whole (its samples are projected onto the crease, which clipping the chord
+                // would not follow): culled only when the view misses its ball.
+                EdgeCurve::Chord { a, b } => {
+                    let (mid, half) = ((a + b) * 0.5 + t, (b - a).length() * 0.5);
+                    (!frustum.is_some_and(|f| f.misses_ball(mid, half)))
+                        .then_some(EdgeCurve::Chord { a: a + t, b: b + t })
+                }
                 EdgeCurve::Circle {
                     centre,
                     radius,
@@ -182,8 +192,8 @@ impl CreaseEdges {
         self.pieces.is_empty()
     }
 
-    /// Total length `Λ` of the edges in view (scene units); the sampling density is `1/Λ` per unit
-    /// length.
+    /// Total length `Λ` of the edges in view (scene units, chords' lengths for extracted creases); the
+    /// sampling density is `1/Λ` per unit length on segments and circles ([`EdgePoint::weight`]).
     pub fn total_length(&self) -> f32 {
         self.cumulative.last().copied().unwrap_or(0.0)
     }
@@ -197,13 +207,15 @@ impl CreaseEdges {
         sampler: &mut Sampler,
     ) -> Option<(EdgePoint, usize, &CreaseEdge)> {
         let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
-        let pt = self.sample([u0, u1])?;
+        let pt = self.sample(scene, [u0, u1])?;
         let (m, edge) = &self.edges[pt.edge];
         on_surface(scene, &scene.shapes[*m], pt.x).then_some((pt, *m, edge))
     }
 
-    /// A point uniform on the total length from two uniform numbers in `[0, 1)`; `None` when empty.
-    pub fn sample(&self, u: [f32; 2]) -> Option<EdgePoint> {
+    /// A point on the edges of `scene` (the scene they were listed from) from two uniform numbers in
+    /// `[0, 1)`: a piece by length, then a point uniform on it (projected onto the crease for a chord);
+    /// `None` when empty or when the projection fails.
+    pub fn sample(&self, scene: &Scene, u: [f32; 2]) -> Option<EdgePoint> {
         if self.pieces.is_empty() {
             return None;
         }
@@ -213,12 +225,29 @@ impl CreaseEdges {
             .partition_point(|&c| c <= target)
             .min(self.pieces.len() - 1);
         let piece = &self.pieces[i];
-        let (x, tangent) = piece.curve.at(u[1]);
-        Some(EdgePoint {
+        let (x, tangent, cosine) = match piece.curve {
+            EdgeCurve::Chord { a, b } => {
+                let shape = &scene.shapes[piece.shape];
+                let t = shape.translate.value();
+                let chord = CreaseEdge {
+                    curve: EdgeCurve::Chord { a: a - t, b: b - t },
+                    ..self.edges[piece.edge].1.clone()
+                };
+                let (x, tangent, cosine) = shape.sdf.crease_point(&chord, u[1])?;
+                (x + t, tangent, cosine)
+            }
+            curve => {
+                let (x, tangent) = curve.at(u[1]);
+                (x, tangent, 1.0)
+            }
+        };
+        let weight = self.total_length() / cosine;
+        weight.is_finite().then_some(EdgePoint {
             x,
             tangent,
             shape: piece.shape,
             edge: piece.edge,
+            weight,
         })
     }
 }
@@ -386,7 +415,7 @@ fn sample<S: Directions>(
     let Some((l_plus, u_plus)) = side(1.0) else {
         return;
     };
-    let measure = len_img * creases.total_length();
+    let measure = len_img * pt.weight;
     if !(measure.is_finite() && l_minus.is_finite() && l_plus.is_finite()) {
         return;
     }

@@ -144,7 +144,7 @@ fn sample<S: Directions>(
     if side.is_nan() || side >= 0.0 {
         return;
     }
-    let weight = edges.total_length() / pdf;
+    let weight = pt.weight / pdf;
     if !weight.is_finite() {
         return;
     }

@@ -54,7 +54,7 @@ pub const CREASE_TEAR_STREAM: u64 = 0x7EA2_C2EA;
 /// Whether the scene's paths can reach a crease after a bounce (the term exists): an integrator with
 /// two or more scattering vertices and a crease edge.
 pub fn applies(scene: &Scene) -> bool {
-    scene.integrator.max_scatter() >= 2 && !scene.creased_shapes().is_empty()
+    scene.integrator.max_scatter() >= 2 && scene.has_crease_edges()
 }
 
 /// The tear samples `0..samples` into any film (their shares not yet divided by `samples`).
@@ -201,7 +201,7 @@ fn sample<S: Directions>(
         for cam in scratch.cams.iter().filter(|c| c.depth >= 2) {
             // x_C is the k-th scattering vertex: the radiance after it has at most D − k more.
             let l = constant.unwrap_or_else(|| scratch.by_depth[(depth - cam.depth) as usize]);
-            let scale = cam.f * l * (cos / pdf * cam.j_film * edges.total_length());
+            let scale = cam.f * l * (cos / pdf * cam.j_film * pt.weight);
             if scale == glam::Vec3::ZERO || !scale.is_finite() {
                 continue;
             }

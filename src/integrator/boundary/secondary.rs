@@ -264,10 +264,7 @@ pub fn split(scene: &Scene, samples: u64) -> Vec<(SecondarySource, u64)> {
                 SecondarySource::Silhouettes,
                 !curved_shapes(scene).is_empty(),
             ),
-            (
-                SecondarySource::CreaseEdges,
-                !scene.creased_shapes().is_empty(),
-            ),
+            (SecondarySource::CreaseEdges, scene.has_crease_edges()),
             (SecondarySource::CreaseTears, crease_tears::applies(scene)),
         ],
     )
