@@ -247,6 +247,23 @@ pub fn trace_path(
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) {
+    let first = (max_scatter > 0).then(|| scene.intersect_resolving(&ray, f32::INFINITY, spread));
+    trace_path_after(scene, ray, first, max_scatter, sampler, record, counters);
+}
+
+/// [`trace_path`] with the camera ray's first intersection `first` already found (by the caller, who
+/// may know better than the tracer: the crease-edge estimator's rays next to a thin wedge); `None`
+/// only when `max_scatter` is 0 (the camera ray then only looks for emission).
+pub(crate) fn trace_path_after(
+    scene: &Scene,
+    ray: Ray,
+    first: Option<Intersection>,
+    max_scatter: u32,
+    sampler: &mut Sampler,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+) {
+    let mut first = first;
     record.camera = ray.o;
     record.vertices.clear();
     record.lights.clear();
@@ -260,8 +277,8 @@ pub fn trace_path(
         let next = if scatter >= max_scatter {
             emission_along(scene, &ray, counters)
         } else {
-            let spread = if scatter == 0 { spread } else { f32::INFINITY };
-            match scene.intersect_resolving(&ray, f32::INFINITY, spread) {
+            let found = first.take();
+            match found.unwrap_or_else(|| scene.intersect(&ray, f32::INFINITY)) {
                 Intersection::Hit(h) => Next::Surface(h),
                 Intersection::Miss => Next::Escape,
                 Intersection::Exhausted => {

@@ -67,11 +67,14 @@ use crate::film::{Film, SampleSink};
 use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::RenderOptions;
-use crate::integrator::path::{PathRecord, TraceCounters, contribution, detached, trace_path};
+use crate::integrator::path::{
+    PathRecord, TraceCounters, contribution, detached, trace_path_after,
+};
+use crate::math::Ray;
 use crate::math::Vec3;
 use crate::sampler::Sampler;
 use crate::scalar::{Directions, Scalar};
-use crate::scene::{Scene, Shape};
+use crate::scene::{Hit, Intersection, Scene, Shape, Surface};
 use crate::sdf::{CreaseEdge, EdgeCurve};
 
 /// The random stream of crease-edge samples (distinct from the silhouettes', outlines' and camera's).
@@ -390,19 +393,25 @@ fn sample<S: Directions>(
     // ray passing `delta` from the edge (at least four camera-ray tolerances).
     let z = q.dot(frame.forward.into());
     let off_pixels = (delta * frame.focal / z).max(BACKGROUND_OFFSET_PIXELS);
+    // The wedge of solid at a convex edge, as the two faces' tangent planes there (see `wedge_hit`).
+    let wedge = (!edge.inverted).then(|| {
+        let normals = [0, 1].map(|f| face_gradient(shape, edge, f, x).normalize_or_zero());
+        Wedge {
+            apex: x,
+            normals,
+            reach: 8.0 * off_pixels * z / frame.focal,
+            shape: m,
+        }
+    });
     let mut side = |sign: f32| -> Option<(glam::Vec3, S)> {
         let off = sign * off_pixels;
         let ray = frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y));
         let depth = scene.integrator.max_scatter();
-        trace_path(
-            scene,
-            ray,
-            frame.spread(ray.d),
-            depth,
-            sampler,
-            record,
-            counters,
-        );
+        let first = (depth > 0).then(|| {
+            let found = scene.intersect_resolving(&ray, f32::INFINITY, frame.spread(ray.d));
+            wedge.as_ref().map_or(found, |w| w.correct(&ray, found))
+        });
+        trace_path_after(scene, ray, first, depth, sampler, record, counters);
         let l: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
         let y = attached_first_vertex::<S>(attach, record)
             .unwrap_or_else(|| fs.origin + Vec3::constant(ray.d));
@@ -424,5 +433,58 @@ fn sample<S: Directions>(
     let cover = (u_plus - u_minus) * S::constant(measure);
     if finite_splat(&value, cover) {
         splat_on_film(scene, (px, py), value, cover, splats);
+    }
+}
+
+/// The solid next to a convex crease point `apex`, to first order: the wedge where both faces' tangent
+/// planes (outward unit `normals`) have the point behind them. The tracer may step over a thin wedge
+/// (its creep steps skip crossings whose chord is shorter than they are, see [`crate::trace`]), and the
+/// sides' rays pass the edge at a fiftieth of a pixel, where an acute wedge is that thin: a lens's rim
+/// or a scoop's lip, where both sides then saw the background and the term vanished.
+struct Wedge {
+    apex: glam::Vec3,
+    normals: [glam::Vec3; 2],
+    /// How far from the apex the tangent planes stand for the faces (eight side offsets).
+    reach: f32,
+    /// Index of the shape.
+    shape: usize,
+}
+
+impl Wedge {
+    /// Where `ray` enters the wedge within `reach` of the apex, and the face it enters through.
+    fn entry(&self, ray: &Ray) -> Option<(f32, usize)> {
+        let (mut t_in, mut face, mut t_out) = (0.0f32, None, f32::INFINITY);
+        for (k, n) in self.normals.iter().enumerate() {
+            let (s0, rate) = (n.dot(ray.o - self.apex), n.dot(ray.d));
+            if rate < 0.0 {
+                let t = -s0 / rate;
+                if t > t_in {
+                    (t_in, face) = (t, Some(k));
+                }
+            } else if rate > 0.0 {
+                t_out = t_out.min(-s0 / rate);
+            } else if s0 > 0.0 {
+                return None;
+            }
+        }
+        let face = face?;
+        (t_in < t_out && (ray.at(t_in) - self.apex).length() <= self.reach).then_some((t_in, face))
+    }
+
+    /// The tracer's first intersection `found` along `ray`, or the wedge's face where the ray enters the
+    /// wedge if the tracer found nothing before it (a miss, or a hit beyond the wedge).
+    fn correct(&self, ray: &Ray, found: Intersection) -> Intersection {
+        let Some((t, face)) = self.entry(ray) else {
+            return found;
+        };
+        match found {
+            Intersection::Hit(h) if h.t <= t + self.reach => found,
+            _ => Intersection::Hit(Hit {
+                t,
+                p: ray.at(t),
+                n: self.normals[face],
+                surface: Surface::Shape(self.shape),
+            }),
+        }
     }
 }
