@@ -90,7 +90,8 @@ fn params_lists_the_default_scene() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A sharp floor's edges are sampled (no note, with either integrator); a hard CSG crease is named.
+/// A sharp floor's edges and a bounded hard CSG crease are sampled (no note, with either
+/// integrator); a crease of unbounded CSG children is named.
 #[test]
 fn diff_note_names_creased_shapes() {
     let dir = workdir("diff-crease");
@@ -121,9 +122,20 @@ fn diff_note_names_creased_shapes() {
         ]});
     });
     let stdout = assert_success(&run(&dir, &args));
+    assert!(!stdout.contains("crease"), "{stdout}");
+    // Two planes cross along a line no finite box holds: not extracted, and named.
+    write_scene(&dir, |v| {
+        v["shapes"][0]["sdf"] = serde_json::json!({"type": "intersection", "children": [
+            {"type": "plane", "normal": [0.0, 1.0, 0.0], "offset": 0.0},
+            {"type": "plane", "normal": [1.0, 0.0, 0.0], "offset": 0.0}
+        ]});
+    });
+    let stdout = assert_success(&run(&dir, &args));
     assert!(
         stdout.contains("not sampled along crease curves")
-            && stdout.contains("ball (hard intersection of children whose surfaces cross)"),
+            && stdout.contains(
+                "ball (hard intersection of unbounded children (planes) whose surfaces cross)"
+            ),
         "{stdout}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

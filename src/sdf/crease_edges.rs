@@ -12,8 +12,8 @@
 //! it there (a box edge inside a union's other child, or cut away by an intersection, is not): the
 //! caller checks `φ ≈ 0` at each point it uses. Inside a subtracted child of a difference the solid lies
 //! outside the primitive: the edge is concave and the surface's normal is `−∇F`
-//! ([`CreaseEdge::inverted`]). Creases where two CSG children cross are not listed
-//! here ([`Sdf::creases`] still reports them).
+//! ([`CreaseEdge::inverted`]). Creases where two CSG children cross are listed with them as the
+//! chords of their extracted curves ([`super::CrossingCrease`], faces [`Face::Child`]).
 
 use super::creases::crossing_pairs;
 use super::{CrossingCrease, Sdf, transform};
@@ -148,8 +148,9 @@ impl Placement {
 }
 
 impl Sdf {
-    /// The crease edges of the sharp boxes and cylinders in this tree (see the [module docs](self)), in
-    /// this node's coordinates. Empty when there are none.
+    /// The crease edges of the sharp boxes and cylinders in this tree (see the [module docs](self)), and
+    /// the chords of the curves where hard CSG children cross ([`super::CrossingCrease::chords`], with
+    /// the default extraction settings), in this node's coordinates. Empty when there are none.
     pub fn crease_edges(&self) -> Vec<CreaseEdge> {
         let found = self.find_creases();
         let mut edges = found.edges;

@@ -1,10 +1,10 @@
 //! Which nodes have crease edges (docs/theory.md §7): curves where the surface normal jumps. A
 //! crease seen from the camera or from a light is a boundary curve of its own (its image moves with the
 //! parameters, and the visibility jumps across it), which the silhouette-based boundary terms do not
-//! sample. The edges of sharp primitives have their own estimators ([`Sdf::crease_edges`]); where a
-//! derivative is requested through a crease no estimator samples (hard CSG,
-//! [`Sdf::unsampled_creases`]), the caller must warn that those terms are missing rather than drop
-//! them silently.
+//! sample. The edges of sharp primitives and the crossings of hard CSG children with bounded common
+//! boxes have their own estimators ([`Sdf::crease_edges`]); where a derivative is requested through a
+//! crease no estimator samples (hard CSG of unbounded children, [`Sdf::unsampled_creases`]), the
+//! caller must warn that those terms are missing rather than drop them silently.
 //!
 //! - **Primitives**: a box or a cylinder with `rounding = 0` has sharp edges (the box's twelve edges, the
 //!   cylinder's two rims). Spheres, tori, capsules and planes have none (the capsule is C1 where its
@@ -38,10 +38,10 @@ impl Sdf {
         self.crease_reasons(false)
     }
 
-    /// The crease curves of this node whose boundary terms the estimators do not sample: every crease of
-    /// hard CSG whose children's surfaces may cross (the edges of sharp boxes and the rims of sharp
-    /// cylinders are sampled, [`Sdf::crease_edges`]). `None` when nothing is missing. Reasons are
-    /// worded as [`Sdf::creases`]'s, joined by `"; "`.
+    /// The crease curves of this node whose boundary terms the estimators do not sample: the creases of
+    /// hard CSG whose children's surfaces may cross in an unbounded region (two planes), where no
+    /// finite box holds the curve (the edges of sharp boxes, the rims of sharp cylinders and bounded
+    /// crossings are sampled, [`Sdf::crease_edges`]). `None` when nothing is missing.
     pub fn unsampled_creases(&self) -> Option<String> {
         self.crease_reasons(true)
     }

@@ -1,6 +1,6 @@
 //! The primary boundary term along crease edges seen from the camera (docs/theory.md §7.2): the
-//! edges of sharp boxes and cylinders, where the surface's normal jumps (the rest of the primary term is
-//! [`super::primary`]; read its module docs first).
+//! edges of sharp boxes and cylinders and the curves where hard CSG children cross, where the surface's
+//! normal jumps (the rest of the primary term is [`super::primary`]; read its module docs first).
 //!
 //! # The jump, on both sides
 //!
@@ -42,7 +42,9 @@
 //! # Sampling
 //!
 //! Edge points are uniform on the total length `Λ` of the edges in view (segments clipped to the view
-//! frustum grown by the filter's reach, rims culled whole); the term's integrand is 0 where the edge is
+//! frustum grown by the filter's reach, rims culled whole; the chords of extracted CSG creases culled
+//! whole, their points projected onto the crease with density `|T·t|/Λ`, docs/theory.md §7.1, and
+//! weighted by its inverse, [`EdgePoint::weight`], in place of `Λ`); the term's integrand is 0 where the edge is
 //! not on the shape's surface (a box edge inside another CSG child, or cut away: `|φ| > eps` there) or is
 //! hidden (the ray from the eye meets something before it). A sample at `x_C` contributes, to every pixel
 //! whose filter covers `u_C = P(x_C)`,
@@ -55,8 +57,15 @@
 //! pixel, averaged over the `N` samples of its own random stream ([`CREASE_STREAM`]).
 //!
 //! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]), the tear at
-//! vertices after the first [`super::crease_tears`]'s. Not included: the creases where two CSG
-//! children cross ([`crate::scene::Scene::unsampled_creases`] lists them).
+//! vertices after the first [`super::crease_tears`]'s. Not included: the creases between unbounded
+//! CSG children ([`crate::scene::Scene::unsampled_creases`] lists them).
+//!
+//! # Thin wedges
+//!
+//! Next to a convex edge whose faces meet at an acute angle, a side's ray passes through a sliver of
+//! solid thinner than the tracer's creep step, which may step over it ([`crate::trace`], "thin
+//! features"): the side then sees what lies beyond. Such a side takes its first intersection from the
+//! faces' tangent planes at the edge point instead (docs/theory.md §7.2).
 
 use super::frustum::Frustum;
 use super::{

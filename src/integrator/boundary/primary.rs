@@ -98,9 +98,9 @@
 //! **Scope.** Both integrators; shapes with finite bounds and curved surfaces (planes and sharp boxes
 //! have no smooth silhouettes), the outlines of finite emitters seen directly
 //! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes) and the crease edges of sharp boxes
-//! and cylinders ([`super::crease_edges`]); the kinds in view share the samples equally
-//! ([`PrimarySources::split`]). Not included: the creases of hard CSG (listed by
-//! [`crate::scene::Scene::unsampled_creases`]), the film edges.
+//! and cylinders and of hard CSG ([`super::crease_edges`]); the kinds in view share the samples equally
+//! ([`PrimarySources::split`]). Not included: the creases of hard CSG between unbounded children
+//! (listed by [`crate::scene::Scene::unsampled_creases`]), the film edges.
 
 use super::crease_edges::{CreaseEdges, run_creases};
 use super::emitter_edges::{EmitterOutlines, run_outlines};
@@ -238,7 +238,7 @@ pub enum PrimarySource {
     Silhouettes,
     /// Outlines of finite emitters seen directly ([`super::emitter_edges`]).
     EmitterOutlines,
-    /// Crease edges of sharp boxes and cylinders ([`super::crease_edges`]).
+    /// Crease edges of sharp boxes and cylinders and of hard CSG ([`super::crease_edges`]).
     CreaseEdges,
 }
 

@@ -115,10 +115,10 @@
 //! changes to how `(x_B, θ_B)` are drawn.
 //!
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
-//! boxes and cylinders ([`super::crease_shadows`], through [`Occluder`]); [`split`] shares the samples
+//! boxes and cylinders and of hard CSG ([`super::crease_shadows`], through [`Occluder`]); [`split`] shares the samples
 //! between them and the tear of creased surfaces at later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
-//! the creases of hard CSG.
+//! the creases of hard CSG between unbounded children.
 
 use super::crease_segment::CreaseSegment;
 use super::crease_shadows::run_crease_shadows;
