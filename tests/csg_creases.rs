@@ -221,3 +221,67 @@ fn notch_through_an_edge() {
         25,
     );
 }
+
+/// Two unit balls with centres `d` apart combined by `op`, seen from `eye` on `integrator`.
+fn two_balls(op: &str, d: f32, eye: [f32; 3], integrator: &str) -> implicit_psdr::scene::Scene {
+    let half = 0.5 * d;
+    scene_json(&format!(
+        r#"{{
+  "camera": {{"origin": {eye:?}, "target": [0, 0, 0], "up": [0, 1, 0],
+             "fov_y": 40.0, "width": 24, "height": 24, "filter": "tent"}},
+  "integrator": {integrator},
+  "shapes": [
+    {{"name": "pair", "sdf": {{"type": "{op}", "children": [
+      {{"type": "sphere", "center": [-{half}, 0, 0], "radius": 1.0}},
+      {{"name": "right", "type": "sphere", "center": [{half}, 0, 0], "radius": 1.0}}]}},
+     "bsdf": {{"type": "diffuse", "albedo": [0.7, 0.7, 0.7]}}}}
+  ],
+  "emitters": {LIGHTS}
+}}"#
+    ))
+}
+
+/// Hard cases, every term of every parameter finite (`derivative_terms` asserts it): a lens whose rim
+/// is seen exactly edge-on (the eye in the rim's plane), two balls that touch at a point (the crease
+/// degenerates: the faces' gradients are parallel), two that barely overlap (a rim far smaller than
+/// a pixel), and a hard union's concave crease on `path` (no shadow of its own; the tear with reversed
+/// normals).
+#[test]
+fn hard_cases_are_finite() {
+    let direct = r#"{"type": "direct"}"#;
+    let path = r#"{"type": "path", "max_depth": 3}"#;
+    let cases = [
+        (
+            "lens edge-on",
+            two_balls("intersection", 0.9, [0.0, 0.0, 4.0], direct),
+            true,
+        ),
+        (
+            "touching balls",
+            two_balls("union", 2.0, [0.3, 1.0, 5.0], direct),
+            false,
+        ),
+        (
+            "barely overlapping",
+            two_balls("union", 1.9998, [0.3, 1.0, 5.0], direct),
+            false,
+        ),
+        (
+            "union crease",
+            two_balls("union", 1.2, [0.3, 1.5, 4.0], path),
+            true,
+        ),
+    ];
+    for (label, scene, creased) in cases {
+        let names = ["right.radius", "right.center.x", "camera.origin.x"];
+        let terms = derivative_terms(&scene, &names, 8, 20_000, 20_000, seed(33));
+        let primary: f64 = terms
+            .iter()
+            .map(|t| t.primary.iter().map(|v| v.abs()).sum::<f64>())
+            .sum();
+        println!("{label}: Σ|primary| {primary:.3}");
+        if creased {
+            assert!(primary > 0.0, "{label}: the crease should contribute");
+        }
+    }
+}

@@ -206,9 +206,10 @@ fn named_parameters_match_forward_mode_term_by_term() {
     }
 }
 
-/// The crease edges' terms (a turned sharp box and a sharp cylinder over a floor: seen by the camera,
-/// their shadows, and on `path` their tear after a bounce) in reverse mode equal the forward mode's
-/// contraction with the adjoint.
+/// The crease edges' terms (a turned sharp box with a ball bitten out of its corner, a crease where
+/// CSG children cross, and a sharp cylinder over a floor: seen by the camera, their shadows, and on
+/// `path` their tear after a bounce) in reverse mode equal the forward mode's contraction with the
+/// adjoint.
 #[test]
 fn crease_edges_match_forward_mode() {
     for integrator in [
@@ -229,7 +230,9 @@ fn crease_edges_case(integrator: &str) {
     {"name": "block",
      "sdf": {"type": "transform", "translate": [-0.5, 0, 0],
              "rotate": {"axis": [0.2, 1, 0.1], "angle": 30}, "scale": 1.0,
-             "child": {"type": "box", "center": [0, 0, 0], "half_size": [0.4, 0.5, 0.4], "rounding": 0}},
+             "child": {"type": "difference", "children": [
+                {"type": "box", "center": [0, 0, 0], "half_size": [0.4, 0.5, 0.4], "rounding": 0},
+                {"name": "bite", "type": "sphere", "center": [0.2, 0.5, 0.3], "radius": 0.35}]}},
      "bsdf": {"type": "diffuse", "albedo": [0.8, 0.6, 0.4]}},
     {"name": "can",
      "sdf": {"type": "cylinder", "center": [0.7, 0, 0], "axis": [0.3, 1, 0.2],
@@ -252,6 +255,7 @@ fn crease_edges_case(integrator: &str) {
         "block.sdf.translate.x",
         "block.sdf.angle",
         "can.radius",
+        "bite.radius",
         "camera.origin.y",
     ]);
     let layout = GradientLayout::select(&mut scene, &params, &[]).unwrap();
