@@ -60,11 +60,11 @@ fn assert_closed(curve: &SilhouetteCurve, what: &str, unresolved: usize) {
     let degrees = curve.degrees();
     let bad: Vec<_> = degrees.iter().filter(|&&d| d != 2).collect();
     assert!(
-        bad.is_empty() && curve.stats.unresolved_boxes <= unresolved,
+        bad.is_empty() && curve.polyline.stats.unresolved_boxes <= unresolved,
         "{what}: {} vertices of degree ≠ 2 ({:?}), stats {:?}",
         bad.len(),
         &bad[..bad.len().min(10)],
-        curve.stats
+        curve.polyline.stats
     );
 }
 
@@ -100,8 +100,8 @@ fn sphere_silhouette_is_the_closed_form_circle_and_its_length_converges() {
         let err = (length - exact) / exact;
         println!(
             "sphere depth {depth}: {} segments, L = {length:.7}, 2πρ = {exact:.7}, rel. error {err:.3e}, {:?}",
-            curve.segments.len(),
-            curve.stats
+            curve.polyline.segments.len(),
+            curve.polyline.stats
         );
         // Chords are inside the circle: the polyline is shorter, by about l²/(24ρ²) relatively.
         assert!(err < 1e-6, "polyline longer than the circle: {err}");
@@ -202,9 +202,9 @@ fn check_convergence(name: &str, shape: &Shape, eye: Vec3, unresolved: usize) ->
         let (phi, psi) = residuals(shape, eye, curve.world_points());
         println!(
             "{name} depth {depth}: {} segments, L = {:.7}, max |φ| {phi:.1e}, max |ψ|/(|∇φ||c−x|) {psi:.1e}, {:?}",
-            curve.segments.len(),
+            curve.polyline.segments.len(),
             curve.polyline_length(),
-            curve.stats
+            curve.polyline.stats
         );
         assert!(
             phi < 1e-5 && psi < 1e-5,
@@ -336,7 +336,7 @@ fn check_sphere_silhouette_at(s: f32, far: f32) {
     let (phi, psi) = residuals(
         &shape_at(Sdf::sphere([0.0; 3], R * s), Vec3::ZERO),
         eye - centre,
-        curve.points.iter().copied(),
+        curve.polyline.points.iter().copied(),
     );
     assert!(
         phi <= 1e-5 * R * s && psi <= 1e-5,

@@ -22,7 +22,7 @@
 use crate::error::Result;
 use crate::integrator::silhouette_boxes::{BoxClass, classify_box, silhouette_boxes};
 use crate::math::Aabb;
-use crate::math::implicit_curve::{CurveFunctions, extract_polyline, project_from_chord};
+use crate::math::implicit_curve::{CurveFunctions, Polyline, extract_polyline, project_from_chord};
 use crate::scalar::Param3;
 use crate::scene::Shape;
 use crate::sdf::Sdf;
@@ -35,16 +35,10 @@ pub use crate::math::implicit_curve::{CurveOptions, ExtractStats};
 pub struct SilhouetteCurve {
     /// The camera centre the curve is the silhouette for.
     pub eye: Vec3,
-    /// Vertices, each on `{φ = 0, ψ = 0}` up to the Newton tolerance, relative to `origin` (the frame
-    /// the curve is extracted and sampled in, at the float resolution of the shape's own size; world
-    /// positions: [`SilhouetteCurve::world_points`]).
-    pub points: Vec<Vec3>,
-    /// Segments as pairs of indices into `points`.
-    pub segments: Vec<[u32; 2]>,
-    /// `cumulative[i]` = total length of segments `0..=i` (f64, to keep the sum exact enough).
-    pub cumulative: Vec<f64>,
-    /// Extraction counters.
-    pub stats: ExtractStats,
+    /// The curve: vertices on `{φ = 0, ψ = 0}` up to the Newton tolerance, relative to `origin` (the
+    /// frame the curve is extracted and sampled in, at the float resolution of the shape's own size;
+    /// world positions: [`SilhouetteCurve::world_points`]), and the extraction's counters.
+    pub polyline: Polyline,
     /// The shape's translation when the curve was extracted: the origin of the frame it was extracted
     /// and is sampled in ([`extract_silhouette`]).
     pub origin: Vec3,
@@ -141,10 +135,7 @@ pub fn extract_silhouette(
     );
     Ok(SilhouetteCurve {
         eye: world_eye,
-        points: polyline.points,
-        segments: polyline.segments,
-        cumulative: polyline.cumulative,
-        stats: polyline.stats,
+        polyline,
         origin,
     })
 }
@@ -152,22 +143,17 @@ pub fn extract_silhouette(
 impl SilhouetteCurve {
     /// The vertices in world space (`points` moved by `origin`, rounded to the world's resolution).
     pub fn world_points(&self) -> impl Iterator<Item = Vec3> + '_ {
-        self.points.iter().map(|&p| p + self.origin)
+        self.polyline.points.iter().map(|&p| p + self.origin)
     }
 
     /// Total length `L` of the polyline.
     pub fn polyline_length(&self) -> f64 {
-        self.cumulative.last().copied().unwrap_or(0.0)
+        self.polyline.length()
     }
 
     /// Number of segments at each vertex.
     pub fn degrees(&self) -> Vec<u32> {
-        let mut degree = vec![0u32; self.points.len()];
-        for s in &self.segments {
-            degree[s[0] as usize] += 1;
-            degree[s[1] as usize] += 1;
-        }
-        degree
+        self.polyline.degrees()
     }
 
     /// Samples a point on the curve from two uniform numbers (`u[0]` picks the segment by length, `u[1]` the
@@ -177,22 +163,13 @@ impl SilhouetteCurve {
     /// ([`SilhouetteCurve::origin`]) and the sample is returned in world space.
     pub fn sample(&self, shape: &Shape, u: [f32; 2]) -> Option<CurveSample> {
         let total = self.polyline_length();
-        if total <= 0.0 {
-            return None;
-        }
-        let target = (u[0] as f64).clamp(0.0, 1.0) * total;
-        let i = self
-            .cumulative
-            .partition_point(|&c| c < target)
-            .min(self.segments.len() - 1);
-        let [ia, ib] = self.segments[i];
+        let (i, chord) = self.polyline.segment_at(u[0])?;
         // In the frame the curve was extracted in (see `own_frame`).
         let fns = SilhouetteFunctions {
             sdf: &shape.sdf,
             eye: self.eye - self.origin,
             cull: None,
         };
-        let chord = [self.points[ia as usize], self.points[ib as usize]];
         let p = project_from_chord(&fns, chord, u[1])?;
         Some(CurveSample {
             x: p.x + self.origin,
