@@ -238,15 +238,12 @@ impl CreaseEdges {
             .min(self.pieces.len() - 1);
         let piece = &self.pieces[i];
         let (x, tangent, cosine) = match piece.curve {
-            EdgeCurve::Chord { a, b } => {
+            EdgeCurve::Chord { .. } => {
+                // Projected in the shape's own frame, where the chord was extracted.
                 let shape = &scene.shapes[piece.shape];
-                let t = shape.translate.value();
-                let chord = CreaseEdge {
-                    curve: EdgeCurve::Chord { a: a - t, b: b - t },
-                    ..self.edges[piece.edge].1.clone()
-                };
-                let (x, tangent, cosine) = shape.sdf.crease_point(&chord, u[1])?;
-                (x + t, tangent, cosine)
+                let (x, tangent, cosine) =
+                    (shape.sdf).crease_point(&self.edges[piece.edge].1, u[1])?;
+                (x + shape.translate.value(), tangent, cosine)
             }
             curve => {
                 let (x, tangent) = curve.at(u[1]);
@@ -402,7 +399,7 @@ fn sample<S: Directions>(
     // ray passing `delta` from the edge (at least four camera-ray tolerances).
     let z = q.dot(frame.forward.into());
     let off_pixels = (delta * frame.focal / z).max(BACKGROUND_OFFSET_PIXELS);
-    // The wedge of solid at a convex edge, as the two faces' tangent planes there (see `wedge_hit`).
+    // The wedge of solid at a convex edge, as the two faces' tangent planes there (see `Wedge`).
     let wedge = (!edge.inverted).then(|| {
         let normals = [0, 1].map(|f| face_gradient(shape, edge, f, x).normalize_or_zero());
         Wedge {
