@@ -75,7 +75,7 @@ pub(crate) fn image_from_py(
     let (w, h) = (width as usize, height as usize);
     if shape != [h, w, 3] {
         return Err(PyValueError::new_err(format!(
-            "{what}: expected shape ({h}, {w}, 3) (height, width, RGB: the scene's image), got {:?}",
+            "{what}: expected shape ({h}, {w}, 3) (height, width, RGB: the scene's image), got {}",
             tuple(&shape)
         )));
     }
