@@ -2,7 +2,7 @@
 //! gradient of any pixel adjoint (a loss of the caller's own).
 
 use super::arrays::{gradient_to_py, image_from_py};
-use super::render::{diff_options, render_options, warn};
+use super::render::{diff_options, warn};
 use super::scene::PyScene;
 use super::{run_detached, scene_error};
 use crate::film::Image;
@@ -70,9 +70,9 @@ pub(crate) fn grad<'py>(
         ));
     }
     let options = diff_options(
-        render_options(&scene, spp, seed)?,
-        spp_primary,
-        spp_secondary,
+        &scene,
+        (spp, seed),
+        (spp_primary, spp_secondary),
         normalization,
     )?;
     let grids: Vec<String> = grids.iter().map(|g| scene.grid_node(g)).collect();

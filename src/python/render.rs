@@ -28,22 +28,23 @@ pub(crate) fn render_options(
     })
 }
 
-/// The derivative options of `diff` and `grad`, with the command-line tool's defaults.
+/// The derivative options of `diff` and `grad`: those of [`render_options`], the boundary budgets
+/// `(primary, secondary)` (`None`: the default) and the pixel normalisation, as the tool's.
 pub(crate) fn diff_options(
-    render: RenderOptions,
-    spp_primary: Option<u32>,
-    spp_secondary: Option<u32>,
+    scene: &Scene,
+    (spp, seed): (Option<u32>, u64),
+    (primary_spp, secondary_spp): (Option<u32>, Option<u32>),
     normalization: &str,
 ) -> PyResult<DiffOptions> {
     let normalization: Normalization = normalization
         .parse()
         .map_err(|e: String| PyValueError::new_err(format!("normalization: {e}")))?;
     Ok(DiffOptions {
-        render,
+        render: render_options(scene, spp, seed)?,
         normalization,
         boundary: BoundaryBudget {
-            primary_spp: spp_primary,
-            secondary_spp: spp_secondary,
+            primary_spp,
+            secondary_spp,
         },
     })
 }
@@ -110,9 +111,9 @@ pub(crate) fn diff<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut scene = scene.scene.clone();
     let options = diff_options(
-        render_options(&scene, spp, seed)?,
-        spp_primary,
-        spp_secondary,
+        &scene,
+        (spp, seed),
+        (spp_primary, spp_secondary),
         normalization,
     )?;
     let mut directions = Vec::new();
