@@ -25,6 +25,7 @@ parser.add_argument("--views", type=int, default=8)
 parser.add_argument("--spp", type=int, default=16)
 parser.add_argument("--steps", type=int, default=12)
 parser.add_argument("--measure", action="store_true", help="time serial against Ray, then stop")
+parser.add_argument("--rounds", type=int, default=5, help="rounds of --measure")
 args = parser.parse_args()
 ray.init(address=args.address)
 
@@ -43,17 +44,22 @@ if args.measure:
     kw = dict(params=params, spp=args.spp)
     multi_view_grad(scene, views, targets, **kw)  # warm up the workers
     plain = [ray.get(t) for t in targets]
-    for label, run in [
-        ("serial, 1 thread", lambda: serial_grad(scene, views, plain, threads=1, **kw)),
-        ("serial, all cores (rayon)", lambda: serial_grad(scene, views, plain, **kw)),
-        ("Ray, 1 task per view, 1 thread each", lambda: multi_view_grad(scene, views, targets, **kw)),
-    ]:
-        times = []
-        for _ in range(3):
+    runs = {
+        "serial, 1 thread": lambda: serial_grad(scene, views, plain, threads=1, **kw),
+        "serial, all cores (rayon)": lambda: serial_grad(scene, views, plain, **kw),
+        "Ray, 1 task per view, 1 thread each": lambda: multi_view_grad(scene, views, targets, **kw),
+    }
+    # Rounds of the three, alternating, so that a busy moment of a shared machine hits them alike.
+    times = {label: [] for label in runs}
+    for _ in range(args.rounds):
+        for label, run in runs.items():
             start = time.perf_counter()
             run()
-            times.append(time.perf_counter() - start)
-        print(f"{label}: median {np.median(times):.2f} s of {[round(t, 2) for t in times]}")
+            times[label].append(time.perf_counter() - start)
+    ray_time = np.median(times["Ray, 1 task per view, 1 thread each"])
+    for label, t in times.items():
+        print(f"{label}: median {np.median(t):.2f} s over {args.rounds} rounds "
+              f"({np.median(t) / ray_time:.2f}x Ray's)")
     raise SystemExit
 
 # Start from a smaller ball off to the side; plain gradient descent with a fixed step.
