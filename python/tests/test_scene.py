@@ -17,6 +17,10 @@ def test_load_equals_from_dict(small, tmp_path):
     loaded = ip.Scene.load(write_scene(doc, tmp_path))
     assert loaded.params() == scene.params()
     assert np.array_equal(ip.render(loaded, seed=3), ip.render(scene, seed=3))
+    # numpy values in the dict are their numbers.
+    doc["camera"]["origin"] = np.array(doc["camera"]["origin"], dtype=np.float32)
+    doc["camera"]["fov_y"] = np.float32(doc["camera"]["fov_y"])
+    assert ip.Scene.from_dict(doc).params() == scene.params()
     assert (scene.width, scene.height, scene.spp) == (16, 12, 4)
 
 

@@ -267,6 +267,14 @@ fn to_json(value: &Bound<'_, PyAny>, path: &str) -> crate::Result<Value> {
             .collect::<crate::Result<_>>()?;
         return Ok(Value::Array(items));
     }
+    // numpy arrays (a vector given as `np.array([0, 1, 0])`): their lists.
+    if value.hasattr("tolist").unwrap_or(false)
+        && value.hasattr("shape").unwrap_or(false)
+        && let Ok(list) = value.call_method0("tolist")
+        && !list.is(value)
+    {
+        return to_json(&list, path);
+    }
     // numpy scalars and other numbers: their float value.
     if let Ok(x) = value.extract::<f64>() {
         return (Number::from_f64(x).map(Value::Number))
