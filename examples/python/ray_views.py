@@ -68,6 +68,6 @@ for name, value in [("ball.radius", 0.75), ("ball.center.x", 0.3), ("ball.center
 for step in range(args.steps):
     loss, g = multi_view_grad(scene, views, targets, params=params, spp=args.spp, seed=2 * step)
     for name in params:
-        scene.set(name, scene.params()[name] - 1.0 * g[name])
+        scene.set(name, scene.params()[name] - 0.6 * g[name])
     values = ", ".join(f"{n} {scene.params()[n]:+.3f}" for n in params)
     print(f"step {step}: loss {loss:.3e}; {values}")
