@@ -19,6 +19,8 @@ pub mod film;
 pub mod integrator;
 pub mod math;
 pub mod optimize;
+#[cfg(feature = "python")]
+mod python;
 pub mod report;
 pub mod sampler;
 pub mod scalar;

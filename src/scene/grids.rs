@@ -34,6 +34,29 @@ impl GridBlock {
     }
 }
 
+/// One entry of the parameter listing ([`Scene::parameter_entries`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParameterEntry {
+    /// A parameter and its current value (as [`Scene::parameters`] lists it).
+    Value(String, f32),
+    /// A grid node's values, as one block.
+    Grid(GridBlock),
+}
+
+/// A forward-mode direction for a grid node's values ([`Scene::select_grid_directions`]): a
+/// perturbation of each value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridDirection {
+    /// The grid node, as `NODE` or its block name `NODE.values`.
+    pub node: String,
+    /// The shape of `values`, `[nz, ny, nx]` (checked against the grid's).
+    pub shape: [usize; 3],
+    /// The perturbation of each value, in the grid's layout (`(z · ny + y) · nx + x`).
+    pub values: Arc<Vec<f32>>,
+    /// Where the direction comes from (a file, an argument), named in a shape error.
+    pub source: String,
+}
+
 /// Generates the walk over the grid nodes of an sdf tree, shared or mutable: `f(prefix, data, selection)`
 /// with the node prefixes of [`Scene::parameters`].
 macro_rules! grid_walk {
@@ -106,6 +129,83 @@ impl Scene {
             );
         }
         out
+    }
+
+    /// Every parameter (as [`Scene::parameters`] lists them) and every grid block, each grid's block
+    /// right after its node's `level` (or at the end): the listing of the `params` command.
+    pub fn parameter_entries(&self) -> Vec<ParameterEntry> {
+        let params = self.parameters();
+        let blocks = self.grid_blocks();
+        let place = |b: &GridBlock| {
+            let level = format!("{}.level", b.node);
+            (params.iter().position(|(n, _)| *n == level)).map_or(params.len(), |i| i + 1)
+        };
+        let mut out = Vec::new();
+        for i in 0..=params.len() {
+            for b in blocks.iter().filter(|b| place(b) == i) {
+                out.push(ParameterEntry::Grid(b.clone()));
+            }
+            if let Some((name, value)) = params.get(i) {
+                out.push(ParameterEntry::Value(name.clone(), *value));
+            }
+        }
+        out
+    }
+
+    /// The grid node that `text` names: `NODE`, or its block name `NODE.values`. Any other text is
+    /// returned as it is, for the selection to report as unknown.
+    pub fn grid_node(&self, text: &str) -> String {
+        let blocks = self.grid_blocks();
+        (blocks.iter().find(|b| b.name == text))
+            .map_or_else(|| text.to_string(), |b| b.node.clone())
+    }
+
+    /// Selects the forward-mode `directions` of grid values in derivative slots `first_slot`,
+    /// `first_slot + 1`, ... (every other grid constant); returns their blocks' names (`NODE.values`),
+    /// the names of their derivatives. `option` names the request in errors (`--grid-direction`).
+    /// Errors: an unknown or repeated node, a direction whose shape is not the grid's (naming its
+    /// source and both shapes); on error the scene is unchanged.
+    pub fn select_grid_directions(
+        &mut self,
+        first_slot: usize,
+        option: &str,
+        directions: &[GridDirection],
+    ) -> Result<Vec<String>> {
+        let blocks = self.grid_blocks();
+        let mut selection: Vec<(String, GridValues)> = Vec::new();
+        let mut names = Vec::new();
+        for (k, direction) in directions.iter().enumerate() {
+            let node = self.grid_node(&direction.node);
+            let Some(block) = blocks.iter().find(|b| b.node == node) else {
+                return Err(match self.unknown_grid(&node) {
+                    Error::Field { message, .. } => Error::field(option, message),
+                    e => e,
+                });
+            };
+            if selection.iter().any(|(n, _)| *n == node) {
+                return Err(Error::field(
+                    option,
+                    format!("grid {node:?} is given twice"),
+                ));
+            }
+            if direction.shape != block.shape {
+                let [nz, ny, nx] = direction.shape;
+                return Err(Error::file(
+                    &direction.source,
+                    format!(
+                        "shape [{nz}, {ny}, {nx}], but grid {node:?} has shape {:?} (a direction \
+                         has one value per grid value)",
+                        block.shape
+                    ),
+                ));
+            }
+            let slot = (first_slot + k) as u32;
+            let u = direction.values.clone();
+            selection.push((node, GridValues::Direction { slot, u }));
+            names.push(block.name.clone());
+        }
+        self.select_grids(&selection)?;
+        Ok(names)
     }
 
     /// Grid node `node`'s values and box.

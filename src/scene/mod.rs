@@ -7,7 +7,7 @@ pub(crate) mod json;
 mod params;
 pub mod patch;
 
-pub use grids::GridBlock;
+pub use grids::{GridBlock, GridDirection, ParameterEntry};
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 

@@ -7,8 +7,7 @@ use anyhow::{Context, Result, bail};
 use implicit_psdr::film::{self, Image};
 use implicit_psdr::integrator::diff::terms_note;
 use implicit_psdr::integrator::{GradientLayout, loss_gradient};
-use implicit_psdr::scalar::GridValues;
-use implicit_psdr::scene::{GridBlock, Scene};
+use implicit_psdr::scene::{GridBlock, GridDirection, ParameterEntry, Scene};
 use implicit_psdr::sdf::{self, GridData};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -17,89 +16,48 @@ use std::sync::Arc;
 /// What `params` prints: every parameter as `name value`, and each grid node's values once, as
 /// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end).
 pub(crate) fn parameter_list(scene: &Scene) -> String {
-    let params = scene.parameters();
-    let blocks = scene.grid_blocks();
-    let place = |b: &GridBlock| {
-        let level = format!("{}.level", b.node);
-        (params.iter().position(|(n, _)| *n == level)).map_or(params.len(), |i| i + 1)
-    };
     let mut out = String::new();
-    for i in 0..=params.len() {
-        for b in blocks.iter().filter(|b| place(b) == i) {
-            let node = &b.node;
-            let _ = writeln!(
-                out,
-                "{} [{}, {}, {}] ({} values; select with --grid {node} or --grid-direction \
-                 {node}=U.npy)",
-                b.name,
-                b.shape[0],
-                b.shape[1],
-                b.shape[2],
-                b.len()
-            );
-        }
-        if let Some((name, value)) = params.get(i) {
-            let _ = writeln!(out, "{name} {value}");
-        }
+    for entry in scene.parameter_entries() {
+        let _ = match entry {
+            ParameterEntry::Value(name, value) => writeln!(out, "{name} {value}"),
+            ParameterEntry::Grid(b) => {
+                let node = &b.node;
+                writeln!(
+                    out,
+                    "{} [{}, {}, {}] ({} values; select with --grid {node} or --grid-direction \
+                     {node}=U.npy)",
+                    b.name,
+                    b.shape[0],
+                    b.shape[1],
+                    b.shape[2],
+                    b.len()
+                )
+            }
+        };
     }
     out
 }
 
-/// The grid node that `text` names: `NODE` or its block name `NODE.values` (as `params` lists it).
-/// Unknown names are returned as they are, for the library to report.
-fn grid_node(blocks: &[GridBlock], text: &str) -> String {
-    (blocks.iter().find(|b| b.name == text)).map_or_else(|| text.to_string(), |b| b.node.clone())
-}
-
 /// Selects the forward-mode directions `(node, U.npy)` of `diff --grid-direction`, in derivative slots
-/// `first_slot`, `first_slot + 1`, ...; returns their blocks' names (`NODE.values`). Errors: an unknown
-/// or repeated node, an unreadable U, a U whose shape is not the grid's (naming the file and both).
+/// `first_slot`, `first_slot + 1`, ...; returns their blocks' names (`NODE.values`). Errors: an
+/// unreadable U, and those of [`Scene::select_grid_directions`] (a U of another shape names its file).
 pub(crate) fn select_directions(
     scene: &mut Scene,
     first_slot: usize,
     directions: &[(String, PathBuf)],
 ) -> Result<Vec<String>, implicit_psdr::Error> {
-    let option = "--grid-direction";
-    let blocks = scene.grid_blocks();
-    let mut selection: Vec<(String, GridValues)> = Vec::new();
-    let mut names = Vec::new();
-    for (k, (text, file)) in directions.iter().enumerate() {
-        let node = grid_node(&blocks, text);
-        let Some(block) = blocks.iter().find(|b| b.node == node) else {
-            // The library's message lists the scene's grid nodes; name our option.
-            return Err(match scene.grid_values(&node) {
-                Err(implicit_psdr::Error::Field { message, .. }) => {
-                    implicit_psdr::Error::field(option, message)
-                }
-                Err(e) => e,
-                Ok(_) => implicit_psdr::Error::field(option, format!("no grid node {node:?}")),
-            });
-        };
-        if selection.iter().any(|(n, _)| *n == node) {
-            return Err(implicit_psdr::Error::field(
-                option,
-                format!("grid {node:?} is given twice"),
-            ));
-        }
+    let mut read = Vec::new();
+    for (node, file) in directions {
         let u = sdf::read_npy(file)?;
         let [nx, ny, nz] = u.dims;
-        if [nz, ny, nx] != block.shape {
-            return Err(implicit_psdr::Error::file(
-                file,
-                format!(
-                    "shape [{nz}, {ny}, {nx}], but grid {node:?} has shape {:?} (a direction has \
-                     one value per grid value)",
-                    block.shape
-                ),
-            ));
-        }
-        let slot = (first_slot + k) as u32;
-        let u = Arc::new(u.values);
-        selection.push((node, GridValues::Direction { slot, u }));
-        names.push(block.name.clone());
+        read.push(GridDirection {
+            node: node.clone(),
+            shape: [nz, ny, nx],
+            values: Arc::new(u.values),
+            source: file.display().to_string(),
+        });
     }
-    scene.select_grids(&selection)?;
-    Ok(names)
+    scene.select_grid_directions(first_slot, "--grid-direction", &read)
 }
 
 /// Reads the target image (channels `R`, `G`, `B`, finite) and checks its size against the scene's.
@@ -256,8 +214,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     let (mut scene, render) = prepare(&args.scene)?;
     let file = in_file(scene_path);
     let target = read_target(&args.target, (scene.camera.width, scene.camera.height))?;
-    let blocks = scene.grid_blocks();
-    let grids: Vec<String> = args.grids.iter().map(|g| grid_node(&blocks, g)).collect();
+    let grids: Vec<String> = args.grids.iter().map(|g| scene.grid_node(g)).collect();
     let layout = GradientLayout::select(&mut scene, &args.params, &grids).map_err(&file)?;
     let grid_paths: Vec<PathBuf> = (layout.grids.iter())
         .map(|(block, _)| grid_output(out, block))

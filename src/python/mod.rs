@@ -1,0 +1,78 @@
+//! The Python extension module `implicit_psdr._native` (feature `python`; built by maturin, see
+//! `pyproject.toml`), re-exported by the pure-Python package `implicit_psdr` (`python/`).
+//!
+//! Every function here makes the calls the command-line tool makes, with its defaults: the scene's
+//! `spp`, seed 0, the differentiable pixel normalisation and the default boundary budgets. Arrays are
+//! numpy `float32`: images `H × W × 3` (row 0 the top row), grids `[nz, ny, nx]`. The GIL is released
+//! while rendering. Library errors become `SceneError` (a `ValueError`) with the library's one-line
+//! message; malformed arguments (shapes, dtypes, non-finite values) become `ValueError`; a panic (a
+//! bug) becomes `RuntimeError` rather than crossing into Python.
+
+mod arrays;
+mod grad;
+mod render;
+mod scene;
+
+use pyo3::create_exception;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+
+create_exception!(
+    _native,
+    SceneError,
+    PyValueError,
+    "An invalid scene, parameter, grid or request, with the library's one-line message naming the \
+     field (`shapes[0].sdf.radius: must be > 0, got -1`)."
+);
+
+/// The Python exception for a library error: its one-line message.
+pub(crate) fn scene_error(e: crate::Error) -> PyErr {
+    SceneError::new_err(e.to_string())
+}
+
+/// Runs `work` without the GIL, on at most `threads` threads (all of rayon's global pool when
+/// `None`), catching a panic so that it reaches Python as a `RuntimeError`. Results do not depend on
+/// the thread count (the driver merges work in a fixed order); capping it lets several renders share
+/// the cores (one per Ray task).
+pub(crate) fn run_detached<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    let pool = match threads {
+        None => None,
+        Some(0) => return Err(PyValueError::new_err("threads: must be >= 1, got 0")),
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| PyRuntimeError::new_err(format!("threads: {e}")))?,
+        ),
+    };
+    let outcome = py.detach(move || {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || match pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }))
+    });
+    outcome.map_err(|panic| {
+        let message = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic".to_string());
+        PyRuntimeError::new_err(format!("internal error (please report): {message}"))
+    })
+}
+
+/// The extension module: the `Scene` class, `render`, `diff`, `grad` and `read_exr`.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add_class::<scene::PyScene>()?;
+    m.add_function(wrap_pyfunction!(scene::scene_from_state, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(render::diff, m)?)?;
+    m.add_function(wrap_pyfunction!(grad::grad, m)?)?;
+    m.add_function(wrap_pyfunction!(arrays::read_exr, m)?)?;
+    m.add("DEFAULT_SEED", 0u64)?;
+    Ok(())
+}

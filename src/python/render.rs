@@ -1,0 +1,165 @@
+//! `render` and `diff`: the image, and derivative images in forward mode, as the `render` and `diff`
+//! commands compute them.
+
+use super::arrays::image_to_py;
+use super::scene::PyScene;
+use super::{run_detached, scene_error};
+use crate::film::Normalization;
+use crate::integrator::{self, BoundaryBudget, DiffOptions, RenderOptions, RenderStats};
+use crate::scene::{GridDirection, Scene};
+use pyo3::exceptions::{PyRuntimeWarning, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Arc;
+
+/// The render options of a call: `spp` (default the scene's, as the command-line tool) and `seed`.
+pub(crate) fn render_options(
+    scene: &Scene,
+    spp: Option<u32>,
+    seed: u64,
+) -> PyResult<RenderOptions> {
+    if spp == Some(0) {
+        return Err(PyValueError::new_err("spp: must be >= 1, got 0"));
+    }
+    Ok(RenderOptions {
+        spp: spp.unwrap_or(scene.spp),
+        seed,
+        ..RenderOptions::default()
+    })
+}
+
+/// The derivative options of `diff` and `grad`: those of [`render_options`], the boundary budgets
+/// `(primary, secondary)` (`None`: the default) and the pixel normalisation, as the tool's.
+pub(crate) fn diff_options(
+    scene: &Scene,
+    (spp, seed): (Option<u32>, u64),
+    (primary_spp, secondary_spp): (Option<u32>, Option<u32>),
+    normalization: &str,
+) -> PyResult<DiffOptions> {
+    let normalization: Normalization = normalization
+        .parse()
+        .map_err(|e: String| PyValueError::new_err(format!("normalization: {e}")))?;
+    Ok(DiffOptions {
+        render: render_options(scene, spp, seed)?,
+        normalization,
+        boundary: BoundaryBudget {
+            primary_spp,
+            secondary_spp,
+        },
+    })
+}
+
+/// Issues what went wrong during a render (rays out of steps, non-finite samples) as Python
+/// warnings, the lines the command-line tool prints.
+pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
+    for line in stats.warnings() {
+        let message = std::ffi::CString::new(line.replace('\0', " "))
+            .expect("no interior NUL after replacing them");
+        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
+    }
+    Ok(())
+}
+
+/// Renders the scene: a float32 array ``(height, width, 3)`` of linear RGB radiance (row 0 the top
+/// row), the image ``implicit-psdr render`` writes for the same ``spp`` (default: the scene's) and
+/// ``seed`` (default 0). ``threads`` caps the threads of this call (default: all cores); the image
+/// does not depend on it.
+#[pyfunction]
+#[pyo3(signature = (scene, *, spp = None, seed = 0, threads = None))]
+pub(crate) fn render<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    spp: Option<u32>,
+    seed: u64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let scene = scene.scene.clone();
+    let options = render_options(&scene, spp, seed)?;
+    let (image, stats) = run_detached(py, threads, move || integrator::render(&scene, &options))?;
+    warn(py, &stats)?;
+    Ok(image_to_py(py, &image).into_any())
+}
+
+/// Derivative images in forward mode, as ``implicit-psdr diff`` computes them (same samples as
+/// ``render`` with the same ``spp`` and ``seed``; the interior, primary and secondary terms).
+///
+/// ``params``: parameter names (see ``Scene.params()``); ``grid_directions``: ``{node: U}``, the
+/// derivative along a perturbation ``U`` (shape ``(nz, ny, nx)``) of a grid's values. Returns a dict
+/// of float32 arrays ``(height, width, 3)`` named as the EXR channels of ``diff`` without their
+/// ``.R/.G/.B``: ``"image"``, ``"d.P"`` per parameter, ``"d.NODE.values"`` per direction, and with
+/// ``terms=True`` ``"d_interior.P"``, ``"d_primary.P"``, ``"d_secondary.P"`` (they sum to ``d.P``;
+/// a term with budget 0 is absent). ``spp_primary`` / ``spp_secondary`` are the boundary budgets
+/// (default ``ceil(spp/32)``, ``ceil(spp/8)``), ``normalization`` ``"differentiable"`` or
+/// ``"fixed"``.
+#[pyfunction]
+#[pyo3(signature = (scene, params = Vec::new(), *, spp = None, seed = 0, terms = false,
+                    grid_directions = None, spp_primary = None, spp_secondary = None,
+                    normalization = "differentiable", threads = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn diff<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    params: Vec<String>,
+    spp: Option<u32>,
+    seed: u64,
+    terms: bool,
+    grid_directions: Option<&Bound<'py, PyDict>>,
+    spp_primary: Option<u32>,
+    spp_secondary: Option<u32>,
+    normalization: &str,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut scene = scene.scene.clone();
+    let options = diff_options(
+        &scene,
+        (spp, seed),
+        (spp_primary, spp_secondary),
+        normalization,
+    )?;
+    let mut directions = Vec::new();
+    for (node, u) in grid_directions.into_iter().flat_map(|d| d.iter()) {
+        let node: String = node.extract()?;
+        let source = format!("grid_directions[{node:?}]");
+        let (shape, values) = super::arrays::grid_from_py(&source, &u)?;
+        directions.push(GridDirection {
+            node,
+            shape,
+            values: Arc::new(values),
+            source,
+        });
+    }
+    if params.is_empty() && directions.is_empty() {
+        return Err(PyValueError::new_err(
+            "diff: nothing to differentiate (give params or grid_directions)",
+        ));
+    }
+    scene.select_parameters(&params).map_err(scene_error)?;
+    // Grid directions take the slots after the named parameters, as in the command-line tool.
+    let mut names = params;
+    let blocks = scene
+        .select_grid_directions(names.len(), "grid_directions", &directions)
+        .map_err(scene_error)?;
+    names.extend(blocks);
+    let count = names.len();
+    let result = run_detached(py, threads, move || {
+        integrator::render_derivatives(&scene, count, &options)
+    })?
+    .map_err(scene_error)?;
+    warn(py, &result.stats)?;
+    let out = PyDict::new(py);
+    // The EXR's channels come in R, G, B triples: `R, G, B`, then `d.P.R, d.P.G, d.P.B`, ...
+    let channels = result.channels(&names, terms);
+    let image = &result.image;
+    for triple in channels.chunks(3) {
+        let name = triple[0].0.strip_suffix('R').unwrap_or(&triple[0].0);
+        let name = name.strip_suffix('.').unwrap_or("image");
+        let mut rgb = crate::film::Image::new(image.width, image.height);
+        for (c, (_, plane)) in triple.iter().enumerate() {
+            for (i, v) in plane.iter().enumerate() {
+                rgb.rgb[3 * i + c] = *v;
+            }
+        }
+        out.set_item(name, image_to_py(py, &rgb))?;
+    }
+    Ok(out)
+}
