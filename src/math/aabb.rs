@@ -62,6 +62,20 @@ impl Aabb {
     pub fn is_finite(&self) -> bool {
         self.min.is_finite() && self.max.is_finite()
     }
+    /// The eight corners of the box; corner `i` takes the upper bound along x, y, z when bit 0, 1, 2 of
+    /// `i` is set.
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            let pick = |bit: usize, k: usize| {
+                if i & bit == 0 {
+                    self.min[k]
+                } else {
+                    self.max[k]
+                }
+            };
+            Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2))
+        })
+    }
     /// The eight octants of the box (split at its centre); octant `i` takes the upper half along x, y, z
     /// when bit 0, 1, 2 of `i` is set.
     pub fn octants(&self) -> [Aabb; 8] {

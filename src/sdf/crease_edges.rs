@@ -404,18 +404,9 @@ fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Vec<CrossingCrease>) {
         if !common.is_finite() {
             continue;
         }
-        let corners = (0..8).map(|c| {
-            let pick = |bit: usize, k: usize| {
-                if c & bit == 0 {
-                    common.min[k]
-                } else {
-                    common.max[k]
-                }
-            };
-            walk.place
-                .point(glam::Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2)))
-        });
-        let bounds = corners.fold(Aabb::EMPTY, |b, p| b.union(&Aabb::new(p, p)));
+        let bounds = (common.corners().into_iter())
+            .map(|c| walk.place.point(c))
+            .fold(Aabb::EMPTY, |b, p| b.union(&Aabb::new(p, p)));
         out.push(CrossingCrease {
             path: walk.path.clone(),
             faces: [i, j].map(|index| Face::Child {

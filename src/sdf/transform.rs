@@ -119,12 +119,7 @@ pub(super) fn bounds(
     let (s, c) = theta.sin_cos();
     let t = translate.value();
     let mut out = Aabb::EMPTY;
-    for i in 0..8 {
-        let corner = glam::Vec3::new(
-            if i & 1 == 0 { b.min.x } else { b.max.x },
-            if i & 2 == 0 { b.min.y } else { b.max.y },
-            if i & 4 == 0 { b.min.z } else { b.max.z },
-        );
+    for corner in b.corners() {
         let r: glam::Vec3 = rotate(Vec3::<f32>::from(corner), axis, c, s).into();
         let x = t + r * scale.value;
         out = out.union(&Aabb::new(x, x));
