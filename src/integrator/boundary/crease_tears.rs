@@ -68,8 +68,12 @@ pub(crate) fn run_crease_tears<S: Directions, F: Film>(
 where
     F::Tile: SampleSink<S>,
 {
+    if !applies(scene) {
+        return RenderStats::default();
+    }
+    // Lists (and extracts) the edges only where the term exists.
     let edges = CreaseEdges::all(scene);
-    if edges.is_empty() || !applies(scene) {
+    if edges.is_empty() {
         return RenderStats::default();
     }
     run_samples::<S, F, _>(
