@@ -21,7 +21,7 @@
 use super::path::{Anchor, Attach, Attached};
 use crate::math::Vec3;
 use crate::scalar::{GridValues, Param, Scalar};
-use crate::scene::{Scene, Shape};
+use crate::scene::{Scene, Shape, VelocityField};
 
 pub use crate::scalar::Grad;
 
@@ -99,6 +99,8 @@ pub struct SceneAttach<'a> {
     scene: &'a Scene,
     /// Per shape: does its geometry depend on a selected parameter?
     shape_moves: Vec<bool>,
+    /// Per shape: are its points carried by its known motion rather than along the normal?
+    carry: Vec<bool>,
     /// Per emitter: does its position or size depend on a selected parameter?
     emitter_moves: Vec<bool>,
 }
@@ -106,9 +108,14 @@ pub struct SceneAttach<'a> {
 impl<'a> SceneAttach<'a> {
     /// Precomputes which shapes and emitters move with the selected parameters.
     pub fn new(scene: &'a Scene) -> Self {
+        let shape_moves: Vec<bool> = scene.shapes.iter().map(geometry_selected).collect();
+        let carry = (scene.shapes.iter().zip(&shape_moves))
+            .map(|(shape, &moves)| moves && carries(scene, shape))
+            .collect();
         Self {
             scene,
-            shape_moves: scene.shapes.iter().map(geometry_selected).collect(),
+            shape_moves,
+            carry,
             emitter_moves: scene
                 .emitters
                 .iter()
@@ -128,6 +135,11 @@ impl<'a> SceneAttach<'a> {
             return constant;
         }
         let shape = &self.scene.shapes[i];
+        if self.carry[i]
+            && let Some(a) = carried_vertex(shape, p, n)
+        {
+            return a;
+        }
         let r = shape.eval::<Grad<S>>(Grad::seed(p));
         let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
         let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
@@ -168,6 +180,72 @@ impl<'a> SceneAttach<'a> {
             None => constant,
         }
     }
+}
+
+/// Whether `shape` is moved by its known motion ([`crate::sdf::Sdf::carried`]) rather than along its
+/// normal: with [`VelocityField::Auto`], for a shape without creases whose motion is known and whose
+/// curvature radius can be below the width of a pixel where the camera sees it (the normal field's
+/// `κV` is heavy-tailed there). Near the eye the normal field stays: a tangential motion there moves
+/// the image fast, and the moving pixel filter's term (theory §2.5) grows with it.
+fn carries(scene: &Scene, shape: &Shape) -> bool {
+    let known = !shape.creased
+        && (shape.sdf)
+            .carried(Vec3::<f32>::constant(glam::Vec3::ZERO))
+            .is_some();
+    match scene.velocity {
+        VelocityField::Normal => return false,
+        VelocityField::Carried => return known,
+        VelocityField::Auto => {}
+    }
+    let camera = &scene.camera;
+    let eye = camera.origin.value();
+    let nearest = (eye.clamp(shape.bounds.min, shape.bounds.max) - eye).length();
+    let pixel = 2.0 * (0.5 * camera.fov_y.value.to_radians()).tan() / camera.height.max(1) as f32;
+    known && shape.sdf.curvature_bound() * nearest * pixel > 1.0
+}
+
+/// The attached vertex of a shape point carried by the shape's known motion `X(p; π)` (theory §8): the
+/// normal velocity `V` stays that of the surface, the tangential part is the motion's, so
+/// `x = p + d + (V − n·d) n` with `d = ∂πX`, and the area factor is its surface divergence,
+/// `J = 1 + ∇_Γ·d + κ (V − n·d)` (`∇_Γ·d = tr ∂d/∂p − nᵀ(∂d/∂p)n`; `V − n·d` vanishes up to rounding
+/// where `X` maps the surface onto the moved one). `None` where the shape has no known motion.
+fn carried_vertex<S: Scalar>(shape: &Shape, p: glam::Vec3, n: glam::Vec3) -> Option<Attached<S>> {
+    let local = p - shape.translate.value();
+    let carried = shape.sdf.carried(Grad::<S>::seed(local))? + shape.translate.get::<Grad<S>>();
+    let c = [carried.x, carried.y, carried.z];
+    // Only the derivative parts: the primal of `X` is `p` up to rounding.
+    let d = Vec3::new(c[0].v, c[1].v, c[2].v);
+    let d = d - d.detach();
+    let jac = |i: usize, j: usize| c[i].g[j] - c[i].g[j].detach();
+    let nv = [n.x, n.y, n.z];
+    let mut div = S::zero();
+    for i in 0..3 {
+        div += jac(i, i);
+        for j in 0..3 {
+            div -= jac(i, j) * (nv[i] * nv[j]);
+        }
+    }
+    let r = shape.eval::<Grad<S>>(Grad::seed(p));
+    let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
+    let (_, g, h) = shape.sdf.hessian(local);
+    let gl = g.length();
+    if !(gl > 1e-12 && gl.is_finite()) {
+        return None;
+    }
+    let v = -(r.v - r.v.detach()) / gl;
+    let off_surface = v - d.dot_f32(n);
+    let kappa = curvature(g, h, gl);
+    let velocity = d + Vec3::constant(n) * off_surface;
+    // ∇φ at the moving point with the moving parameters, to first order: ∇φ + H ẋ + ∂π∇φ.
+    let h_velocity = Vec3::constant(h.x_axis) * velocity.x
+        + Vec3::constant(h.y_axis) * velocity.y
+        + Vec3::constant(h.z_axis) * velocity.z;
+    let moved = (grad + h_velocity).normalize_or_zero();
+    Some(Attached {
+        x: with_primal(Vec3::constant(p) + velocity, p),
+        n: with_primal(moved, n),
+        j: div + off_surface * kappa + 1.0,
+    })
 }
 
 /// `κ = (tr H − gᵀHg/|g|²)/|g|`, 0 where not finite.
@@ -332,5 +410,206 @@ mod tests {
         for c in [a.n.x, a.n.y, a.n.z] {
             assert!(c.eps.abs() < 1e-5);
         }
+    }
+
+    /// A one-shape scene from the JSON of its sdf, parameter `param` selected, with `field`.
+    fn json_scene(sdf: &str, param: &str, field: VelocityField) -> Scene {
+        let json = format!(
+            r#"{{"camera": {{"origin": [0, 0, 6], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
+                "width": 8, "height": 8}},
+               "integrator": {{"type": "direct"}}, "spp": 1,
+               "shapes": [{{"name": "s", "sdf": {sdf}, "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
+               "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#
+        );
+        let mut scene = crate::scene::parse(&json, std::path::Path::new(".")).unwrap();
+        scene.select_parameters(&[param.to_string()]).unwrap();
+        scene.velocity = field;
+        scene
+    }
+
+    /// Surface points of shape 0: the first crossing of rays from outside towards its centre region.
+    fn surface_points(scene: &Scene) -> Vec<(glam::Vec3, glam::Vec3)> {
+        let shape = &scene.shapes[0];
+        let c = shape.bounds.center();
+        let reach = shape.bounds.extent().length() + 1.0;
+        let mut out = Vec::new();
+        for k in 0..40 {
+            // Directions spread over the sphere (a spiral), aimed a little off the centre.
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / 40.0;
+            let a = k as f32 * 2.399_963;
+            let d = glam::Vec3::new(
+                (1.0 - z * z).sqrt() * a.cos(),
+                z,
+                (1.0 - z * z).sqrt() * a.sin(),
+            );
+            let aim =
+                c + 0.3 * glam::Vec3::new(a.sin(), 0.5 * a.cos(), 0.2) * shape.bounds.extent();
+            let o = aim + d * reach;
+            let span = 2.0 * reach;
+            // March to the first sign change, then bisect.
+            let steps = 4000;
+            let at = |i: u32| span * i as f32 / steps as f32;
+            let Some(i) = (1..=steps).find(|&i| shape.eval_f32(o - d * at(i)) < 0.0) else {
+                continue;
+            };
+            let (mut t0, mut t1) = (at(i - 1), at(i));
+            for _ in 0..40 {
+                let m = 0.5 * (t0 + t1);
+                if shape.eval_f32(o - d * m) < 0.0 {
+                    t1 = m
+                } else {
+                    t0 = m
+                }
+            }
+            let p = o - d * (0.5 * (t0 + t1));
+            out.push((p, shape.normal(p)));
+        }
+        assert!(out.len() >= 12, "only {} surface points", out.len());
+        out
+    }
+
+    const CARRIED: [(&str, &str); 9] = [
+        (
+            r#"{"type": "torus", "center": [0.1, 0, 0], "axis": [0, 1, 0], "major_radius": 1.2, "minor_radius": 0.3}"#,
+            "s.major_radius",
+        ),
+        (
+            r#"{"type": "torus", "center": [0.1, 0, 0], "axis": [0.6, 0.8, 0], "major_radius": 1.2, "minor_radius": 0.3}"#,
+            "s.minor_radius",
+        ),
+        (
+            r#"{"type": "torus", "center": [0.1, 0, 0], "axis": [0, 1, 0], "major_radius": 1.2, "minor_radius": 0.3}"#,
+            "s.center.x",
+        ),
+        (
+            r#"{"type": "sphere", "center": [0.2, 0.1, 0], "radius": 0.8}"#,
+            "s.radius",
+        ),
+        (
+            r#"{"type": "capsule", "a": [-0.5, 0, 0], "b": [0.6, 0.3, 0.1], "radius": 0.4}"#,
+            "s.a.y",
+        ),
+        (
+            r#"{"type": "capsule", "a": [-0.5, 0, 0], "b": [0.6, 0.3, 0.1], "radius": 0.4}"#,
+            "s.radius",
+        ),
+        (
+            r#"{"type": "box", "center": [0, 0.2, 0], "half_size": [0.6, 0.5, 0.4], "rounding": 0.1}"#,
+            "s.center.y",
+        ),
+        (
+            r#"{"type": "transform", "translate": [0.1, 0.2, 0], "rotate": {"axis": [0.6, 0, 0.8], "angle": 35}, "scale": 1.3,
+             "child": {"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0], "major_radius": 0.8, "minor_radius": 0.2}}"#,
+            "s.sdf.angle",
+        ),
+        (
+            r#"{"type": "transform", "translate": [0.1, 0.2, 0], "rotate": {"axis": [0.6, 0, 0.8], "angle": 35}, "scale": 1.3,
+             "child": {"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0], "major_radius": 0.8, "minor_radius": 0.2}}"#,
+            "s.sdf.scale",
+        ),
+    ];
+
+    /// A carried point stays on the moving surface (`∂π φ(x(π); π) = 0`), its normal velocity is the
+    /// surface's (`∂πx·n = V`), and its moved normal is the normal of the moved surface there.
+    #[test]
+    fn carried_points_stay_on_the_moving_surface() {
+        for (sdf, param) in CARRIED {
+            let scene = json_scene(sdf, param, VelocityField::Carried);
+            let normal = json_scene(sdf, param, VelocityField::Normal);
+            let attach = SceneAttach::new(&scene);
+            let reference = SceneAttach::new(&normal);
+            assert!(attach.carry[0], "{param}: carried");
+            for (p, n) in surface_points(&scene) {
+                let a = attach.shape_vertex::<Dual32>(0, p, n);
+                let b = reference.shape_vertex::<Dual32>(0, p, n);
+                assert_eq!((a.x.primal(), a.n.primal(), a.j.re), (p, n, 1.0));
+                let dx = glam::Vec3::new(a.x.x.eps, a.x.y.eps, a.x.z.eps);
+                let v = glam::Vec3::new(b.x.x.eps, b.x.y.eps, b.x.z.eps).dot(n);
+                let on = scene.shapes[0].eval::<Dual32>(a.x).eps;
+                assert!(on.abs() < 2e-3, "{param} at {p}: ∂πφ(x) = {on}");
+                assert!(
+                    (dx.dot(n) - v).abs() < 2e-3,
+                    "{param} at {p}: {} vs V {v}",
+                    dx.dot(n)
+                );
+                // The normal of the moved surface at the moved point, by AD of φ at x(π).
+                let g = scene.shapes[0].eval::<Grad<Dual32>>(Grad::seed(p));
+                let h = scene.shapes[0]
+                    .sdf
+                    .hessian(p - scene.shapes[0].translate.value())
+                    .2;
+                let grad = glam::Vec3::new(g.g[0].eps, g.g[1].eps, g.g[2].eps) + h * dx;
+                let gl = scene.shapes[0].gradient(p).length();
+                let dn = (grad - n * n.dot(grad)) / gl;
+                let an = glam::Vec3::new(a.n.x.eps, a.n.y.eps, a.n.z.eps);
+                assert!(
+                    (an - dn).length() < 2e-3 * (1.0 + dn.length()),
+                    "{param} at {p}: ∂πn {an} vs {dn}"
+                );
+            }
+        }
+    }
+
+    /// `∂πJ` in closed form at a surface point.
+    type ExpectedJ = fn(glam::Vec3) -> f32;
+
+    /// The area factor in closed form: `∂πJ = 1/ρ` for a torus's major radius (`ρ` the distance from
+    /// its axis), 0 for rigid motions (a centre, a rotation), `2/s` for a transform's scale `s`, `κ`
+    /// (= the normal field's) for a sphere's radius.
+    #[test]
+    fn carried_area_factor_in_closed_form() {
+        let cases: [(usize, ExpectedJ); 5] = [
+            (0, |p| 1.0 / glam::Vec2::new(p.x - 0.1, p.z).length()),
+            (2, |_| 0.0),
+            (3, |_| 2.0 / 0.8),
+            (6, |_| 0.0),
+            (7, |_| 0.0),
+        ];
+        for (i, expected) in cases {
+            let (sdf, param) = CARRIED[i];
+            let scene = json_scene(sdf, param, VelocityField::Carried);
+            let attach = SceneAttach::new(&scene);
+            for (p, n) in surface_points(&scene) {
+                let j = attach.shape_vertex::<Dual32>(0, p, n).j.eps;
+                let e = expected(p);
+                assert!(
+                    (j - e).abs() < 1e-3 * (1.0 + e.abs()),
+                    "{param} at {p}: ∂πJ {j} vs {e}"
+                );
+            }
+        }
+        // The scale of a transform changes areas by s² per unit s: ∂πJ = 2/s.
+        let (sdf, param) = CARRIED[8];
+        let scene = json_scene(sdf, param, VelocityField::Carried);
+        let attach = SceneAttach::new(&scene);
+        for (p, n) in surface_points(&scene) {
+            let j = attach.shape_vertex::<Dual32>(0, p, n).j.eps;
+            assert!((j - 2.0 / 1.3).abs() < 1e-3, "scale at {p}: ∂πJ {j}");
+        }
+    }
+
+    /// `Auto` carries a thin torus seen from afar (curvature radius below a pixel) and keeps the normal
+    /// field for a ball, for CSG with a moving child, and for a thin torus around the eye.
+    #[test]
+    fn auto_carries_only_thin_shapes_seen_from_afar() {
+        let thin = r#"{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
+        let auto = |sdf: &str, param: &str| {
+            SceneAttach::new(&json_scene(sdf, param, VelocityField::Auto)).carry[0]
+        };
+        assert!(auto(thin, "s.major_radius"));
+        assert!(!auto(
+            r#"{"type": "sphere", "center": [0, 0, 0], "radius": 1}"#,
+            "s.center.x"
+        ));
+        assert!(!auto(
+            r#"{"type": "union", "children": [{"name": "a", "type": "sphere", "center": [0, 0, 0], "radius": 0.01},
+                {"type": "sphere", "center": [1, 0, 0], "radius": 1}]}"#,
+            "a.center.x"
+        ));
+        let around_eye = r#"{"type": "torus", "center": [0, 0, 6], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
+        assert!(!auto(around_eye, "s.major_radius"));
+        assert!(
+            !SceneAttach::new(&json_scene(thin, "s.major_radius", VelocityField::Normal)).carry[0]
+        );
     }
 }

@@ -27,6 +27,7 @@
 //! axis.
 
 mod bake;
+mod carried;
 mod crease_edges;
 mod creases;
 mod crossing_creases;
