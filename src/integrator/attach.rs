@@ -19,9 +19,10 @@
 //! as constants (no Hessian).
 
 use super::path::{Anchor, Attach, Attached};
+use super::velocity;
 use crate::math::Vec3;
 use crate::scalar::{GridValues, Param, Scalar};
-use crate::scene::{Scene, Shape, VelocityField};
+use crate::scene::{Scene, Shape};
 
 pub use crate::scalar::Grad;
 
@@ -39,7 +40,7 @@ pub fn unit_ratio<S: Scalar>(x: S) -> S {
 
 /// `v` with its primal replaced by exactly `primal` (the derivative kept).
 #[inline]
-fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
+pub(super) fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
     Vec3::constant(primal) + (v - v.detach())
 }
 
@@ -110,7 +111,7 @@ impl<'a> SceneAttach<'a> {
     pub fn new(scene: &'a Scene) -> Self {
         let shape_moves: Vec<bool> = scene.shapes.iter().map(geometry_selected).collect();
         let carry = (scene.shapes.iter().zip(&shape_moves))
-            .map(|(shape, &moves)| moves && carries(scene, shape))
+            .map(|(shape, &moves)| moves && velocity::carries(scene, shape))
             .collect();
         Self {
             scene,
@@ -136,7 +137,7 @@ impl<'a> SceneAttach<'a> {
         }
         let shape = &self.scene.shapes[i];
         if self.carry[i]
-            && let Some(a) = carried_vertex(shape, p, n)
+            && let Some(a) = velocity::moved_vertex(shape, p, n)
         {
             return a;
         }
@@ -182,75 +183,9 @@ impl<'a> SceneAttach<'a> {
     }
 }
 
-/// Whether `shape` is moved by its known motion ([`crate::sdf::Sdf::carried`]) rather than along its
-/// normal: with [`VelocityField::Auto`], for a shape without creases whose motion is known and whose
-/// curvature radius can be below the width of a pixel where the camera sees it (the normal field's
-/// `κV` is heavy-tailed there). Near the eye the normal field stays: a tangential motion there moves
-/// the image fast, and the moving pixel filter's term (theory §2.5) grows with it.
-fn carries(scene: &Scene, shape: &Shape) -> bool {
-    let known = !shape.creased
-        && (shape.sdf)
-            .carried(Vec3::<f32>::constant(glam::Vec3::ZERO))
-            .is_some();
-    match scene.velocity {
-        VelocityField::Normal => return false,
-        VelocityField::Carried => return known,
-        VelocityField::Auto => {}
-    }
-    let camera = &scene.camera;
-    let eye = camera.origin.value();
-    let nearest = (eye.clamp(shape.bounds.min, shape.bounds.max) - eye).length();
-    let pixel = 2.0 * (0.5 * camera.fov_y.value.to_radians()).tan() / camera.height.max(1) as f32;
-    known && shape.sdf.curvature_bound() * nearest * pixel > 1.0
-}
-
-/// The attached vertex of a shape point carried by the shape's known motion `X(p; π)` (theory §8): the
-/// normal velocity `V` stays that of the surface, the tangential part is the motion's, so
-/// `x = p + d + (V − n·d) n` with `d = ∂πX`, and the area factor is its surface divergence,
-/// `J = 1 + ∇_Γ·d + κ (V − n·d)` (`∇_Γ·d = tr ∂d/∂p − nᵀ(∂d/∂p)n`; `V − n·d` vanishes up to rounding
-/// where `X` maps the surface onto the moved one). `None` where the shape has no known motion.
-fn carried_vertex<S: Scalar>(shape: &Shape, p: glam::Vec3, n: glam::Vec3) -> Option<Attached<S>> {
-    let local = p - shape.translate.value();
-    let carried = shape.sdf.carried(Grad::<S>::seed(local))? + shape.translate.get::<Grad<S>>();
-    let c = [carried.x, carried.y, carried.z];
-    // Only the derivative parts: the primal of `X` is `p` up to rounding.
-    let d = Vec3::new(c[0].v, c[1].v, c[2].v);
-    let d = d - d.detach();
-    let jac = |i: usize, j: usize| c[i].g[j] - c[i].g[j].detach();
-    let nv = [n.x, n.y, n.z];
-    let mut div = S::zero();
-    for i in 0..3 {
-        div += jac(i, i);
-        for j in 0..3 {
-            div -= jac(i, j) * (nv[i] * nv[j]);
-        }
-    }
-    let r = shape.eval::<Grad<S>>(Grad::seed(p));
-    let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
-    let (_, g, h) = shape.sdf.hessian(local);
-    let gl = g.length();
-    if !(gl > 1e-12 && gl.is_finite()) {
-        return None;
-    }
-    let v = -(r.v - r.v.detach()) / gl;
-    let off_surface = v - d.dot_f32(n);
-    let kappa = curvature(g, h, gl);
-    let velocity = d + Vec3::constant(n) * off_surface;
-    // ∇φ at the moving point with the moving parameters, to first order: ∇φ + H ẋ + ∂π∇φ.
-    let h_velocity = Vec3::constant(h.x_axis) * velocity.x
-        + Vec3::constant(h.y_axis) * velocity.y
-        + Vec3::constant(h.z_axis) * velocity.z;
-    let moved = (grad + h_velocity).normalize_or_zero();
-    Some(Attached {
-        x: with_primal(Vec3::constant(p) + velocity, p),
-        n: with_primal(moved, n),
-        j: div + off_surface * kappa + 1.0,
-    })
-}
-
 /// `κ = (tr H − gᵀHg/|g|²)/|g|`, 0 where not finite.
 #[inline]
-fn curvature(g: glam::Vec3, h: glam::Mat3, gl: f32) -> f32 {
+pub(super) fn curvature(g: glam::Vec3, h: glam::Mat3, gl: f32) -> f32 {
     let tr = h.x_axis.x + h.y_axis.y + h.z_axis.z;
     let k = (tr - g.dot(h * g) / (gl * gl)) / gl;
     if k.is_finite() { k } else { 0.0 }
@@ -283,6 +218,7 @@ mod tests {
     use crate::integrator::IntegratorKind;
     use crate::scalar::Dual32;
     use crate::scalar::Param3;
+    use crate::scene::VelocityField;
     use crate::sdf::Sdf;
 
     fn scene_with(sdf: Sdf) -> Scene {

@@ -63,6 +63,7 @@ pub mod shading;
 pub mod silhouette_boxes;
 pub mod silhouette_curve;
 pub mod surface_sampling;
+pub mod velocity;
 
 pub use crate::film::Normalization;
 pub use crate::scene::IntegratorKind;

@@ -1,0 +1,205 @@
+//! Velocity fields other than the normal field (docs/theory.md §8): how the points of a shape's surface
+//! move with the selected parameters when that choice lowers the variance of the interior term.
+//!
+//! Any field `u` that moves the surface onto itself in the normal direction (`u·n = V`) gives the same
+//! derivative; the normal field `u = V n` has the area factor `∂πJ = κV`, heavy-tailed where the
+//! curvature `κ` is huge. A field with a tangential part `d_T` has the area factor of its surface
+//! divergence, and moves every attached position and normal with it. Written for any motion `u` with
+//! spatial Jacobian `∂u/∂p` (both from [`Grad`] arithmetic), `u` corrected along `n` so that its normal
+//! part is the surface's exactly:
+//!
+//! ```text
+//!   x = p + d + (V − n·d) n,   J = 1 + ∇_Γ·d + κ (V − n·d),   ∇_Γ·d = tr ∂d/∂p − nᵀ(∂d/∂p)n
+//! ```
+//!
+//! Two motions are known:
+//! - **carried** ([`crate::sdf::Sdf::carried`]): translations, rotations and scales of transforms, a
+//!   torus's centre and major radius, the centres and radii of spheres and capsules, the centres of
+//!   boxes and cylinders: bounded divergence (0 for rigid motions, `1/ρ` for a torus's major radius);
+//! - **along a smooth union's crease**: a smooth union of two children whose blend `k` is far below
+//!   their own curvature radius `ℓ` is a crease smoothed over a width of order `k`, where `κ ~ 1/k`.
+//!   Near it, the field that keeps both children's values, the least-norm `u_C` with
+//!   `∇φ_a·u_C = −∂πφ_a` and `∇φ_b·u_C = −∂πφ_b`, moves the blend with the crease like a rigid body
+//!   (it keeps `smin(φ_a, φ_b)`, so `u_C·n = V` in the blend and `κ` never multiplies anything), and
+//!   its divergence is of the order of the children's curvature. Away from the crease the normal
+//!   field takes over: `u = w u_C + (1 − w) V n`, the weight `w` going from 1 (where the children
+//!   differ by less than `k`) to 0 (by more than `k + ℓ`) as a smooth step, and to 0 where the
+//!   children's normals are nearly parallel (their crease is ill-conditioned there). `∇w` enters the
+//!   divergence through the Jacobian, of order `1/ℓ`, not `1/k`.
+
+use super::attach::{curvature, with_primal};
+use super::path::Attached;
+use crate::math::Vec3;
+use crate::scalar::{Grad, Scalar};
+use crate::scene::{Scene, Shape, VelocityField};
+use crate::sdf::Sdf;
+
+/// `sin²` of the angle between the children's normals below which a crease's field fades out (about
+/// 18°), and below which it is not evaluated at all (the weight is then below `1e-9`).
+const FULL_CREASE_SIN2: f32 = 0.1;
+const LEAST_CREASE_SIN2: f32 = 1e-6;
+
+/// Whether `shape` moves by a known field rather than along its normal ([`VelocityField`]). With
+/// [`VelocityField::Auto`]: a shape without creases with a known field, whose curvature radius can be
+/// below the width of a pixel where the camera sees it (the normal field's `κV` is heavy-tailed
+/// there). Near the eye the normal field stays: a tangential motion there moves the image fast, and
+/// the moving pixel filter's term (theory §2.5) grows with it.
+pub fn carries(scene: &Scene, shape: &Shape) -> bool {
+    let known = !shape.creased
+        && ((shape.sdf)
+            .carried(Vec3::<f32>::constant(glam::Vec3::ZERO))
+            .is_some()
+            || SmoothPair::of(&shape.sdf).is_some());
+    match scene.velocity {
+        VelocityField::Normal => return false,
+        VelocityField::Carried => return known,
+        VelocityField::Auto => {}
+    }
+    let camera = &scene.camera;
+    let eye = camera.origin.value();
+    let nearest = (eye.clamp(shape.bounds.min, shape.bounds.max) - eye).length();
+    let pixel = 2.0 * (0.5 * camera.fov_y.value.to_radians()).tan() / camera.height.max(1) as f32;
+    known && shape.sdf.curvature_bound() * nearest * pixel > 1.0
+}
+
+/// The attached vertex of shape point `p` (normal `n`) moved by the shape's known field (see the
+/// [module docs](self)); `None` where it has none or the gradient vanishes.
+pub fn moved_vertex<S: Scalar>(shape: &Shape, p: glam::Vec3, n: glam::Vec3) -> Option<Attached<S>> {
+    let seed = Grad::<S>::seed(p - shape.translate.value());
+    let motion = match shape.sdf.carried(seed) {
+        Some(carried) => {
+            carried + shape.translate.get::<Grad<S>>() - seed - shape.translate.value()
+        }
+        None => SmoothPair::of(&shape.sdf)?.motion::<S>(shape, p)?,
+    };
+    vertex_from_motion(shape, p, n, motion)
+}
+
+/// The attached vertex for the motion `u` (its derivative parts: the primal of `u` is zero up to
+/// rounding), by the formulas of the module docs.
+fn vertex_from_motion<S: Scalar>(
+    shape: &Shape,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    u: Vec3<Grad<S>>,
+) -> Option<Attached<S>> {
+    let c = [u.x, u.y, u.z];
+    let d = Vec3::new(c[0].v, c[1].v, c[2].v);
+    let d = d - d.detach();
+    let jac = |i: usize, j: usize| c[i].g[j] - c[i].g[j].detach();
+    let nv = [n.x, n.y, n.z];
+    let mut div = S::zero();
+    for i in 0..3 {
+        div += jac(i, i);
+        for j in 0..3 {
+            div -= jac(i, j) * (nv[i] * nv[j]);
+        }
+    }
+    let r = shape.eval::<Grad<S>>(Grad::seed(p));
+    let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
+    let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
+    let gl = g.length();
+    if !(gl > 1e-12 && gl.is_finite()) {
+        return None;
+    }
+    let v = -(r.v - r.v.detach()) / gl;
+    let off_surface = v - d.dot_f32(n);
+    let velocity = d + Vec3::constant(n) * off_surface;
+    // ∇φ at the moving point with the moving parameters, to first order: ∇φ + H ẋ + ∂π∇φ.
+    let h_velocity = Vec3::constant(h.x_axis) * velocity.x
+        + Vec3::constant(h.y_axis) * velocity.y
+        + Vec3::constant(h.z_axis) * velocity.z;
+    let moved = (grad + h_velocity).normalize_or_zero();
+    Some(Attached {
+        x: with_primal(Vec3::constant(p) + velocity, p),
+        n: with_primal(moved, n),
+        j: div + off_surface * curvature(g, h, gl) + 1.0,
+    })
+}
+
+/// A smooth union of two children whose blend is far below their curvature radius (see the
+/// [module docs](self)).
+struct SmoothPair<'a> {
+    a: &'a Sdf,
+    b: &'a Sdf,
+    /// The blend radius `k`.
+    k: f32,
+    /// The reach `ℓ` of the crease's field beyond the blend: the children's smallest curvature radius.
+    reach: f32,
+}
+
+impl<'a> SmoothPair<'a> {
+    /// The pair at the root of `sdf` (through names), with `k` not selected and `4k < ℓ`.
+    fn of(sdf: &'a Sdf) -> Option<Self> {
+        match sdf {
+            Sdf::Named { child, .. } => Self::of(child),
+            Sdf::SmoothUnion { children, k } if children.len() == 2 && k.slot.is_none() => {
+                let (a, b) = (&children[0], &children[1]);
+                let reach = 1.0 / a.curvature_bound().max(b.curvature_bound());
+                (k.value > 0.0 && 4.0 * k.value < reach && reach.is_finite()).then_some(Self {
+                    a,
+                    b,
+                    k: k.value,
+                    reach,
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// The motion `u = w u_C + (1 − w) V n` at shape point `p`, with its spatial Jacobian.
+    fn motion<S: Scalar>(&self, shape: &Shape, p: glam::Vec3) -> Option<Vec3<Grad<S>>> {
+        let local = p - shape.translate.value();
+        let at = Grad::<S>::seed(p) - shape.translate.get::<Grad<S>>();
+        // Value, gradient (with its spatial derivatives, the Hessian) and the parameter derivative
+        // (with its spatial gradient) of a function of the point.
+        let field = |sdf: &Sdf| {
+            let (value, g, h) = sdf.hessian(local);
+            let r = sdf.eval::<Grad<S>>(at);
+            let dpi = Grad {
+                v: r.v - r.v.detach(),
+                g: r.g.map(|x| x - x.detach()),
+            };
+            let cols = [h.x_axis, h.y_axis, h.z_axis];
+            let grad = |i: usize| Grad {
+                v: S::constant(g[i]),
+                g: std::array::from_fn(|j| S::constant(cols[j][i])),
+            };
+            (value, g, Vec3::new(grad(0), grad(1), grad(2)), dpi)
+        };
+        let (phi_a, g_a, ga, sa) = field(self.a);
+        let (phi_b, g_b, gb, sb) = field(self.b);
+        let (_, _, g, s) = field(&shape.sdf);
+        // The normal field of the union.
+        let gl = g.length();
+        if !(gl.primal() > 1e-12 && gl.primal().is_finite()) {
+            return None;
+        }
+        let normal = g * (-s / (gl * gl));
+        // How far from the crease: the children's difference beyond the blend, in units of ℓ.
+        let diff = Grad {
+            v: S::constant(phi_a - phi_b),
+            g: std::array::from_fn(|j| S::constant(g_a[j] - g_b[j])),
+        };
+        let w_far = smooth_step((diff.abs() - self.k) / self.reach);
+        let (aa, ab, bb) = (ga.dot(ga), ga.dot(gb), gb.dot(gb));
+        let det = aa * bb - ab * ab;
+        let sin2 = det / (aa * bb);
+        // Far from the crease, or where it is ill-conditioned (also NaN), the normal field alone.
+        let conditioned = sin2.primal() > LEAST_CREASE_SIN2;
+        if !conditioned || w_far.primal() >= 1.0 {
+            return Some(normal);
+        }
+        let w = (Grad::constant(1.0) - w_far) * smooth_step(sin2 / FULL_CREASE_SIN2);
+        let alpha = (sb * ab - sa * bb) / det;
+        let beta = (sa * ab - sb * aa) / det;
+        let crease = ga * alpha + gb * beta;
+        Some(crease * w + normal * (Grad::constant(1.0) - w))
+    }
+}
+
+/// `3t² − 2t³` of `t` clamped to `[0, 1]`: 0 below, 1 above, C1.
+fn smooth_step<S: Scalar>(t: S) -> S {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (S::constant(3.0) - t * 2.0)
+}
