@@ -414,6 +414,17 @@ fn bad_arguments_exit_2_without_output() {
             "--normalization",
         ),
         (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--velocity-field",
+                "tangent",
+            ],
+            "--velocity-field",
+        ),
+        (
             &["fd", "scene.json", "--param", "ball.radius", "--h", "0"],
             "--h",
         ),
@@ -432,6 +443,36 @@ fn bad_arguments_exit_2_without_output() {
         assert_failure(&run(&dir, args), expected);
     }
     assert_eq!(outputs(&dir, &["scene.json"]), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--velocity-field`: on the default scene `auto` keeps the normal field (the ball's curvature radius
+/// is far above a pixel), bit for bit, and `carried` moves the ball rigidly: another estimate.
+#[test]
+fn diff_velocity_field_chooses_the_motion() {
+    let dir = workdir("velocity-field");
+    write_scene(&dir, |_| {});
+    let channels = |field: &str| {
+        let out = format!("{field}.exr");
+        let args = [
+            "diff",
+            "scene.json",
+            "--param",
+            "ball.center.x",
+            "--velocity-field",
+            field,
+            "--out",
+            &out,
+            "--png",
+            &format!("{field}.png"),
+        ];
+        assert_success(&run(&dir, &args));
+        let (_, _, c) = film::read_exr(&dir.join(&out)).unwrap();
+        c
+    };
+    let (auto, normal, carried) = (channels("auto"), channels("normal"), channels("carried"));
+    assert_eq!(auto, normal);
+    assert_ne!(auto, carried);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

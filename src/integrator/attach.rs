@@ -14,6 +14,10 @@
 //!   (a b)`, a sphere point to `c_S + r_S n` with `J = r_S² / r²`; normals do not move.
 //! - **Camera**: the lifted origin.
 //!
+//! Shapes whose curvature radius can be below a pixel may move by a field with a tangential part
+//! instead of the normal field ([`super::velocity`], theory §8), chosen per shape by
+//! [`crate::scene::VelocityField`].
+//!
 //! Every attached quantity has exactly the recorded primal (position, normal, `J = 1`), so a derivative
 //! pass reproduces the image bit for bit. Shapes and emitters without a selected parameter are attached
 //! as constants (no Hessian).

@@ -206,6 +206,21 @@ pub enum VelocityField {
     Carried,
 }
 
+impl std::str::FromStr for VelocityField {
+    type Err = String;
+    /// `"auto"`, `"normal"` or `"carried"`.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text {
+            "auto" => Ok(Self::Auto),
+            "normal" => Ok(Self::Normal),
+            "carried" => Ok(Self::Carried),
+            _ => Err(format!(
+                "unknown velocity field {text:?} (expected auto, normal or carried)"
+            )),
+        }
+    }
+}
+
 /// The nearest surface found so far by [`Scene::intersect`].
 struct Nearest {
     t: f32,

@@ -2,6 +2,7 @@
 
 use clap::{ArgGroup, Args, Parser, Subcommand};
 use implicit_psdr::integrator::{Loss, Normalization};
+use implicit_psdr::scene::VelocityField;
 use std::path::PathBuf;
 
 /// Physically based rendering of implicit surfaces.
@@ -124,6 +125,12 @@ pub(crate) struct EstimatorArgs {
     /// (the filter-weight sum is a constant).
     #[arg(long, default_value = "differentiable")]
     pub(crate) normalization: Normalization,
+    /// How surface points move with the parameters (same derivative, different noise): `auto` (a
+    /// shape's known motion where its curvature radius is below a pixel, e.g. a thin torus or a tight
+    /// smooth union; the normal field elsewhere), `normal` (along the normal everywhere) or `carried`
+    /// (the known motion wherever there is one).
+    #[arg(long, default_value = "auto")]
+    pub(crate) velocity_field: VelocityField,
 }
 
 #[derive(Args, Debug)]

@@ -233,6 +233,7 @@ fn diff(args: &DiffArgs) -> Result<()> {
     names.extend(
         grad::select_directions(&mut scene, names.len(), &args.grid_directions).map_err(&file)?,
     );
+    scene.velocity = args.estimator.velocity_field;
     let options = diff_options(render, &args.estimator);
     let count = names.len();
     let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;
