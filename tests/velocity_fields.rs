@@ -139,23 +139,29 @@ fn thin_torus_of_minor_radius_1e_2() {
     check(1e-2, "ring.translate.x", 5.0);
 }
 
+/// [`thin_torus`]'s scene with a ball of radius 0.8 and `albedo` in place of the torus (named `ring`).
+fn ball(albedo: f32) -> Scene {
+    let mut scene = thin_torus(0.1);
+    scene.shapes[0] = scene_json(&format!(
+        r#"{{"camera": {{"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
+              "width": 8, "height": 8}},
+            "integrator": {{"type": "direct"}}, "spp": 1,
+            "shapes": [{{"name": "ring", "sdf": {{"type": "sphere", "center": [0, 0, 0], "radius": 0.8}},
+              "bsdf": {{"type": "diffuse", "albedo": [{albedo}, {albedo}, {albedo}]}}}}],
+            "emitters": []}}"#
+    ))
+    .shapes[0]
+        .clone();
+    scene
+}
+
 /// A ball under the same lights, translated: its curvature radius is far above a pixel, so `auto` is
 /// the normal field; its image sum agrees with finite differences. Measured: fd 4.80 ± 1.11 (4 × 4096
 /// spp), auto 5.50 (spread 2.9 over six seeds); the carried (rigid) field 6.10 (spread 1.56): for a
 /// ball most of the spread is the silhouette term's (2 to 11 per seed), which no field removes.
 #[test]
 fn translated_ball_agrees_with_fd() {
-    let mut scene = thin_torus(0.1);
-    scene.shapes[0] = scene_json(
-        r#"{"camera": {"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
-              "width": 8, "height": 8},
-            "integrator": {"type": "direct"}, "spp": 1,
-            "shapes": [{"name": "ring", "sdf": {"type": "sphere", "center": [0, 0, 0], "radius": 0.8},
-              "bsdf": {"type": "diffuse", "albedo": [0.2, 0.2, 0.2]}}],
-            "emitters": []}"#,
-    )
-    .shapes[0]
-        .clone();
+    let scene = ball(0.2);
     let seeds: Vec<u64> = (1..=6).collect();
     let auto = sums(&scene, "ring.center.x", VelocityField::Auto, 256, &seeds);
     let (reference, reference_error) =
@@ -178,17 +184,7 @@ fn translated_ball_agrees_with_fd() {
 /// derivative images are those of the normal field, bit for bit.
 #[test]
 fn auto_keeps_the_normal_field_for_a_ball() {
-    let mut scene = thin_torus(0.01);
-    scene.shapes[0] = scene_json(
-        r#"{"camera": {"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
-              "width": 8, "height": 8},
-            "integrator": {"type": "direct"}, "spp": 1,
-            "shapes": [{"name": "ring", "sdf": {"type": "sphere", "center": [0, 0, 0], "radius": 0.8},
-              "bsdf": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}],
-            "emitters": []}"#,
-    )
-    .shapes[0]
-        .clone();
+    let scene = ball(0.5);
     let auto = sums(&scene, "ring.center.x", VelocityField::Auto, 16, &[3]);
     let normal = sums(&scene, "ring.center.x", VelocityField::Normal, 16, &[3]);
     let carried = sums(&scene, "ring.center.x", VelocityField::Carried, 16, &[3]);
