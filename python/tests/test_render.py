@@ -91,6 +91,8 @@ def test_diff_bad_requests(small):
         ip.diff(scene, grid_directions={"nope": np.zeros((4, 4, 4))})
     with pytest.raises(ValueError, match=r"normalization: "):
         ip.diff(scene, ["ball.radius"], normalization="sometimes")
+    with pytest.raises(ValueError, match=r"velocity_field: unknown velocity field"):
+        ip.diff(scene, ["ball.radius"], velocity_field="sideways")
     u = np.zeros(scene.grid(GRID).shape)
     u[0, 0, 0] = np.inf
     with pytest.raises(ValueError, match=r"must be finite, got inf at index \[0, 0, 0\]"):
@@ -99,3 +101,18 @@ def test_diff_bad_requests(small):
     doc["camera"]["filter"] = "box"
     with pytest.raises(ip.SceneError, match=r"^camera\.filter: .*box filter"):
         ip.diff(ip.Scene.from_dict(doc), ["ball.radius"])
+
+
+def test_diff_velocity_field(small, cli, tmp_path):
+    """`velocity_field` is `--velocity-field`: `auto` keeps the ball's normal field, `carried` moves it
+    rigidly (another estimate of the same derivative), bit for bit as the tool."""
+    scene, doc = small("sphere_floor")
+    d = {f: ip.diff(scene, ["ball.center.x"], velocity_field=f)["d.ball.center.x"]
+         for f in ("auto", "normal", "carried")}
+    assert np.array_equal(d["auto"], d["normal"])
+    assert not np.array_equal(d["auto"], d["carried"])
+    cli("diff", write_scene(doc, tmp_path), "--param", "ball.center.x", "--velocity-field", "carried",
+        "--out", "d.exr", "--png", "d.png", cwd=tmp_path)
+    exr = ip.read_exr(tmp_path / "d.exr")
+    cli_d = np.stack([exr[f"d.ball.center.x.{c}"] for c in "RGB"], axis=-1)
+    assert np.array_equal(cli_d, d["carried"])

@@ -29,11 +29,12 @@ enum Against {
 /// ``params``: parameter names; ``grids``: grid nodes (``NODE`` or ``NODE.values``) whose every
 /// value gets a gradient. Returns ``(loss, {name: float, node: float32 array (nz, ny, nx)})``.
 /// ``spp`` (default: the scene's), ``seed`` (default 0), the boundary budgets and
-/// ``normalization`` are those of ``diff``; ``threads`` caps this call's threads.
+/// ``normalization`` and ``velocity_field`` are those of ``diff``; ``threads`` caps this call's threads.
 #[pyfunction]
 #[pyo3(signature = (scene, target = None, loss = "l2", adjoint = None, params = Vec::new(),
                     grids = Vec::new(), *, spp = None, seed = 0, spp_primary = None,
-                    spp_secondary = None, normalization = "differentiable", threads = None))]
+                    spp_secondary = None, normalization = "differentiable", velocity_field = "auto",
+                    threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn grad<'py>(
     py: Python<'py>,
@@ -48,6 +49,7 @@ pub(crate) fn grad<'py>(
     spp_primary: Option<u32>,
     spp_secondary: Option<u32>,
     normalization: &str,
+    velocity_field: &str,
     threads: Option<usize>,
 ) -> PyResult<(Option<f64>, Bound<'py, PyDict>)> {
     let mut scene = scene.scene.clone();
@@ -70,10 +72,10 @@ pub(crate) fn grad<'py>(
         ));
     }
     let options = diff_options(
-        &scene,
+        &mut scene,
         (spp, seed),
         (spp_primary, spp_secondary),
-        normalization,
+        (normalization, velocity_field),
     )?;
     let grids: Vec<String> = grids.iter().map(|g| scene.grid_node(g)).collect();
     let layout = GradientLayout::select(&mut scene, &params, &grids).map_err(scene_error)?;

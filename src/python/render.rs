@@ -29,16 +29,20 @@ pub(crate) fn render_options(
 }
 
 /// The derivative options of `diff` and `grad`: those of [`render_options`], the boundary budgets
-/// `(primary, secondary)` (`None`: the default) and the pixel normalisation, as the tool's.
+/// `(primary, secondary)` (`None`: the default) and the pixel normalisation, as the tool's; the
+/// velocity field (`"auto"`, `"normal"` or `"carried"`, as `--velocity-field`) is set on `scene`.
 pub(crate) fn diff_options(
-    scene: &Scene,
+    scene: &mut Scene,
     (spp, seed): (Option<u32>, u64),
     (primary_spp, secondary_spp): (Option<u32>, Option<u32>),
-    normalization: &str,
+    (normalization, velocity_field): (&str, &str),
 ) -> PyResult<DiffOptions> {
     let normalization: Normalization = normalization
         .parse()
         .map_err(|e: String| PyValueError::new_err(format!("normalization: {e}")))?;
+    scene.velocity = velocity_field
+        .parse()
+        .map_err(|e: String| PyValueError::new_err(format!("velocity_field: {e}")))?;
     Ok(DiffOptions {
         render: render_options(scene, spp, seed)?,
         normalization,
@@ -90,11 +94,11 @@ pub(crate) fn render<'py>(
 /// ``terms=True`` ``"d_interior.P"``, ``"d_primary.P"``, ``"d_secondary.P"`` (they sum to ``d.P``;
 /// a term with budget 0 is absent). ``spp_primary`` / ``spp_secondary`` are the boundary budgets
 /// (default ``ceil(spp/32)``, ``ceil(spp/8)``), ``normalization`` ``"differentiable"`` or
-/// ``"fixed"``.
+/// ``"fixed"``, ``velocity_field`` ``"auto"``, ``"normal"`` or ``"carried"`` (as ``--velocity-field``).
 #[pyfunction]
 #[pyo3(signature = (scene, params = Vec::new(), *, spp = None, seed = 0, terms = false,
                     grid_directions = None, spp_primary = None, spp_secondary = None,
-                    normalization = "differentiable", threads = None))]
+                    normalization = "differentiable", velocity_field = "auto", threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn diff<'py>(
     py: Python<'py>,
@@ -107,14 +111,15 @@ pub(crate) fn diff<'py>(
     spp_primary: Option<u32>,
     spp_secondary: Option<u32>,
     normalization: &str,
+    velocity_field: &str,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut scene = scene.scene.clone();
     let options = diff_options(
-        &scene,
+        &mut scene,
         (spp, seed),
         (spp_primary, spp_secondary),
-        normalization,
+        (normalization, velocity_field),
     )?;
     let mut directions = Vec::new();
     for (node, u) in grid_directions.into_iter().flat_map(|d| d.iter()) {
