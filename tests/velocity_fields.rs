@@ -357,3 +357,50 @@ fn smooth_union_field_changes_the_area_as_the_surface_does() {
         }
     }
 }
+
+/// Hard cases of carried motions: a torus of minor radius 1e-4 seen edge-on from its own plane, the eye
+/// in its hole, a ring whose hole closes (major radius just above the minor), the eye inside a thin
+/// tube; every field forced: every term finite (checked by `derivative_terms`).
+#[test]
+fn carried_hard_cases_are_finite() {
+    for (eye, major, minor) in [
+        ("[0, 0, 4]", 1.0, 1e-4),
+        ("[0, 0.01, 4]", 1.0, 1e-2),
+        ("[0.1, 0.05, 0]", 1.0, 1e-3),
+        ("[0, 2, 3]", 0.3001, 0.3),
+        ("[1, 0, 0]", 1.0, 0.05),
+    ] {
+        let scene = scene_json(&format!(
+            r#"{{"camera": {{"origin": {eye}, "target": [0, 0, 0.5], "up": [0, 1, 0], "fov_y": 60,
+                  "width": 16, "height": 16, "filter": "tent"}},
+                "integrator": {{"type": "path", "max_depth": 3}}, "spp": 16,
+                "shapes": [
+                  {{"name": "ring", "sdf": {{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0],
+                    "major_radius": {major}, "minor_radius": {minor}}},
+                    "bsdf": {{"type": "diffuse", "albedo": [0.6, 0.6, 0.6]}}}},
+                  {{"name": "floor", "sdf": {{"type": "plane", "normal": [0, 1, 0], "offset": -1}},
+                    "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
+                "emitters": [
+                  {{"name": "light", "type": "rectangle", "center": [1, 3, 2], "normal": [-0.3, -1, -0.6],
+                    "u": [1, 0, 0], "size": [1, 1], "radiance": [8, 8, 8]}},
+                  {{"name": "sky", "type": "constant", "radiance": [0.5, 0.5, 0.5]}}]}}"#
+        ));
+        for field in [VelocityField::Auto, VelocityField::Carried] {
+            let mut s = scene.clone();
+            s.velocity = field;
+            derivative_terms(
+                &s,
+                &[
+                    "ring.major_radius",
+                    "ring.translate.x",
+                    "ring.minor_radius",
+                    "floor.offset",
+                ],
+                16,
+                2048,
+                8192,
+                5,
+            );
+        }
+    }
+}
