@@ -239,6 +239,12 @@ fn smooth_union_error_does_not_grow_as_k_shrinks() {
     );
 }
 
+/// The lights of the hard cases: a rectangle light above and a sky.
+const HARD_CASE_LIGHTS: &str = r#"[
+    {"name": "light", "type": "rectangle", "center": [1, 3, 2], "normal": [-0.3, -1, -0.6],
+     "u": [1, 0, 0], "size": [1, 1], "radiance": [8, 8, 8]},
+    {"name": "sky", "type": "constant", "radiance": [0.5, 0.5, 0.5]}]"#;
+
 /// Hard cases of the crease-following field: children that barely overlap (their normals nearly
 /// parallel along the crease), one ball almost inside the other, a blend seen edge-on, and a tiny blend
 /// around the eye: every term finite (checked by `derivative_terms`).
@@ -275,10 +281,7 @@ fn smooth_union_hard_cases_are_finite() {
                     {{"name": "a", "type": "sphere", "center": {a}}},
                     {{"name": "b", "type": "sphere", "center": {b}}}]}},
                   "bsdf": {{"type": "diffuse", "albedo": [0.6, 0.6, 0.6]}}}}],
-                "emitters": [
-                  {{"name": "light", "type": "rectangle", "center": [1, 3, 2], "normal": [-0.3, -1, -0.6],
-                    "u": [1, 0, 0], "size": [1, 1], "radiance": [8, 8, 8]}},
-                  {{"name": "sky", "type": "constant", "radiance": [0.5, 0.5, 0.5]}}]}}"#
+                "emitters": {HARD_CASE_LIGHTS}}}"#
         ));
         for field in [VelocityField::Auto, VelocityField::Carried] {
             let mut s = scene.clone();
@@ -380,10 +383,7 @@ fn carried_hard_cases_are_finite() {
                     "bsdf": {{"type": "diffuse", "albedo": [0.6, 0.6, 0.6]}}}},
                   {{"name": "floor", "sdf": {{"type": "plane", "normal": [0, 1, 0], "offset": -1}},
                     "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
-                "emitters": [
-                  {{"name": "light", "type": "rectangle", "center": [1, 3, 2], "normal": [-0.3, -1, -0.6],
-                    "u": [1, 0, 0], "size": [1, 1], "radiance": [8, 8, 8]}},
-                  {{"name": "sky", "type": "constant", "radiance": [0.5, 0.5, 0.5]}}]}}"#
+                "emitters": {HARD_CASE_LIGHTS}}}"#
         ));
         for field in [VelocityField::Auto, VelocityField::Carried] {
             let mut s = scene.clone();

@@ -44,7 +44,7 @@ pub fn unit_ratio<S: Scalar>(x: S) -> S {
 
 /// `v` with its primal replaced by exactly `primal` (the derivative kept).
 #[inline]
-pub(super) fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
+fn with_primal<S: Scalar>(v: Vec3<S>, primal: glam::Vec3) -> Vec3<S> {
     Vec3::constant(primal) + (v - v.detach())
 }
 
@@ -104,8 +104,8 @@ pub struct SceneAttach<'a> {
     scene: &'a Scene,
     /// Per shape: does its geometry depend on a selected parameter?
     shape_moves: Vec<bool>,
-    /// Per shape: are its points carried by its known motion rather than along the normal?
-    carry: Vec<bool>,
+    /// Per shape: the field that moves its points when not the normal field ([`velocity`]).
+    field: Vec<Option<velocity::Field<'a>>>,
     /// Per emitter: does its position or size depend on a selected parameter?
     emitter_moves: Vec<bool>,
 }
@@ -114,13 +114,13 @@ impl<'a> SceneAttach<'a> {
     /// Precomputes which shapes and emitters move with the selected parameters.
     pub fn new(scene: &'a Scene) -> Self {
         let shape_moves: Vec<bool> = scene.shapes.iter().map(geometry_selected).collect();
-        let carry = (scene.shapes.iter().zip(&shape_moves))
-            .map(|(shape, &moves)| moves && velocity::carries(scene, shape))
+        let field = (scene.shapes.iter().zip(&shape_moves))
+            .map(|(shape, &moves)| moves.then(|| velocity::Field::of(scene, shape)).flatten())
             .collect();
         Self {
             scene,
             shape_moves,
-            carry,
+            field,
             emitter_moves: scene
                 .emitters
                 .iter()
@@ -140,29 +140,11 @@ impl<'a> SceneAttach<'a> {
             return constant;
         }
         let shape = &self.scene.shapes[i];
-        if self.carry[i]
-            && let Some(a) = velocity::moved_vertex(shape, p, n)
-        {
-            return a;
-        }
-        let r = shape.eval::<Grad<S>>(Grad::seed(p));
-        let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
-        let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
-        let gl = g.length();
-        if !(gl > 1e-12 && gl.is_finite()) {
-            return constant;
-        }
-        let v = -(r.v - r.v.detach()) / gl;
-        let kappa = curvature(g, h, gl);
-        let x = Vec3::constant(p) + Vec3::constant(n) * v;
-        // ∇φ at the moving point with the moving parameters, to first order.
-        let hn = h * n;
-        let moved = (grad + Vec3::constant(hn) * v).normalize_or_zero();
-        Attached {
-            x: with_primal(x, p),
-            n: with_primal(moved, n),
-            j: v * kappa + 1.0,
-        }
+        let moved = match &self.field[i] {
+            Some(field) => field.vertex(shape, p, n),
+            None => surface_vertex(shape, p, n, Vec3::zero(), S::zero()),
+        };
+        moved.unwrap_or(constant)
     }
 
     /// The attached point `p` (normal `n`) of finite emitter `e`.
@@ -187,9 +169,44 @@ impl<'a> SceneAttach<'a> {
     }
 }
 
+/// The attached vertex of point `p` (normal `n`) of `shape` whose points move by `d` (any motion; primal
+/// zero) with surface divergence `div` (theory §8, eq. 8.1): the normal part corrected to the surface's
+/// normal velocity `V`, `x = p + d + (V − n·d) n`, `J = 1 + κ (V − n·d) + div`, and the normal of the
+/// moved surface at the moved point, `normalize(∇φ_S(p) + H ẋ)` (2.5). `d = 0`, `div = 0` is the normal
+/// field (2.4). `None` where the gradient vanishes.
+pub(super) fn surface_vertex<S: Scalar>(
+    shape: &Shape,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    d: Vec3<S>,
+    div: S,
+) -> Option<Attached<S>> {
+    let r = shape.eval::<Grad<S>>(Grad::seed(p));
+    let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
+    let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
+    let gl = g.length();
+    if !(gl > 1e-12 && gl.is_finite()) {
+        return None;
+    }
+    let v = -(r.v - r.v.detach()) / gl;
+    let off_surface = v - d.dot_f32(n);
+    let kappa = curvature(g, h, gl);
+    let x = Vec3::constant(p) + d + Vec3::constant(n) * off_surface;
+    // ∇φ at the moving point with the moving parameters, to first order: ∇φ + ∂π∇φ + H ẋ.
+    let hd = Vec3::constant(h.x_axis) * d.x
+        + Vec3::constant(h.y_axis) * d.y
+        + Vec3::constant(h.z_axis) * d.z;
+    let moved = (grad + Vec3::constant(h * n) * off_surface + hd).normalize_or_zero();
+    Some(Attached {
+        x: with_primal(x, p),
+        n: with_primal(moved, n),
+        j: off_surface * kappa + 1.0 + div,
+    })
+}
+
 /// `κ = (tr H − gᵀHg/|g|²)/|g|`, 0 where not finite.
 #[inline]
-pub(super) fn curvature(g: glam::Vec3, h: glam::Mat3, gl: f32) -> f32 {
+fn curvature(g: glam::Vec3, h: glam::Mat3, gl: f32) -> f32 {
     let tr = h.x_axis.x + h.y_axis.y + h.z_axis.z;
     let k = (tr - g.dot(h * g) / (gl * gl)) / gl;
     if k.is_finite() { k } else { 0.0 }
@@ -458,7 +475,7 @@ mod tests {
             let normal = json_scene(sdf, param, VelocityField::Normal);
             let attach = SceneAttach::new(&scene);
             let reference = SceneAttach::new(&normal);
-            assert!(attach.carry[0], "{param}: carried");
+            assert!(attach.field[0].is_some(), "{param}: carried");
             for (p, n) in surface_points(&scene) {
                 let a = attach.shape_vertex::<Dual32>(0, p, n);
                 let b = reference.shape_vertex::<Dual32>(0, p, n);
@@ -534,7 +551,7 @@ mod tests {
     fn auto_carries_only_thin_shapes_seen_from_afar() {
         let thin = r#"{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
         let auto = |sdf: &str, param: &str| {
-            SceneAttach::new(&json_scene(sdf, param, VelocityField::Auto)).carry[0]
+            SceneAttach::new(&json_scene(sdf, param, VelocityField::Auto)).field[0].is_some()
         };
         assert!(auto(thin, "s.major_radius"));
         assert!(!auto(
@@ -549,7 +566,8 @@ mod tests {
         let around_eye = r#"{"type": "torus", "center": [0, 0, 6], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
         assert!(!auto(around_eye, "s.major_radius"));
         assert!(
-            !SceneAttach::new(&json_scene(thin, "s.major_radius", VelocityField::Normal)).carry[0]
+            SceneAttach::new(&json_scene(thin, "s.major_radius", VelocityField::Normal)).field[0]
+                .is_none()
         );
     }
 }

@@ -27,7 +27,7 @@
 //!   children's normals are nearly parallel (their crease is ill-conditioned there). `∇w` enters the
 //!   divergence through the Jacobian, of order `1/ℓ`, not `1/k`.
 
-use super::attach::{curvature, with_primal};
+use super::attach::surface_vertex;
 use super::path::Attached;
 use crate::math::Vec3;
 use crate::scalar::{Grad, Scalar};
@@ -39,87 +39,82 @@ use crate::sdf::Sdf;
 const FULL_CREASE_SIN2: f32 = 0.1;
 const LEAST_CREASE_SIN2: f32 = 1e-6;
 
-/// Whether `shape` moves by a known field rather than along its normal ([`VelocityField`]). With
-/// [`VelocityField::Auto`]: a shape without creases with a known field, whose curvature radius can be
-/// below the width of a pixel where the camera sees it (the normal field's `κV` is heavy-tailed
-/// there). Near the eye the normal field stays: a tangential motion there moves the image fast, and
-/// the moving pixel filter's term (theory §2.5) grows with it.
-pub fn carries(scene: &Scene, shape: &Shape) -> bool {
-    let known = !shape.creased
-        && ((shape.sdf)
+/// The field that moves a shape's points instead of the normal field, decided once per shape.
+#[derive(Clone, Debug)]
+pub enum Field<'a> {
+    /// The shape's known motion ([`Sdf::carried`]).
+    Carried,
+    /// The crease-following field of a smooth union of two children.
+    Crease(SmoothPair<'a>),
+}
+
+impl<'a> Field<'a> {
+    /// The field of `shape` under `scene`'s choice ([`VelocityField`]); `None` for the normal field.
+    /// With [`VelocityField::Auto`]: a shape without creases with a known field, whose curvature
+    /// radius can be below the width of a pixel where the camera sees it (the normal field's `κV` is
+    /// heavy-tailed there). Near the eye the normal field stays: a tangential motion there moves the
+    /// image fast, and the moving pixel filter's term (theory §2.5) grows with it.
+    pub fn of(scene: &Scene, shape: &'a Shape) -> Option<Self> {
+        if scene.velocity == VelocityField::Normal || shape.creased {
+            return None;
+        }
+        let known = if (shape.sdf)
             .carried(Vec3::<f32>::constant(glam::Vec3::ZERO))
             .is_some()
-            || SmoothPair::of(&shape.sdf).is_some());
-    match scene.velocity {
-        VelocityField::Normal => return false,
-        VelocityField::Carried => return known,
-        VelocityField::Auto => {}
-    }
-    let camera = &scene.camera;
-    let eye = camera.origin.value();
-    let nearest = (eye.clamp(shape.bounds.min, shape.bounds.max) - eye).length();
-    let pixel = 2.0 * (0.5 * camera.fov_y.value.to_radians()).tan() / camera.height.max(1) as f32;
-    known && shape.sdf.curvature_bound() * nearest * pixel > 1.0
-}
-
-/// The attached vertex of shape point `p` (normal `n`) moved by the shape's known field (see the
-/// [module docs](self)); `None` where it has none or the gradient vanishes.
-pub fn moved_vertex<S: Scalar>(shape: &Shape, p: glam::Vec3, n: glam::Vec3) -> Option<Attached<S>> {
-    let seed = Grad::<S>::seed(p - shape.translate.value());
-    let motion = match shape.sdf.carried(seed) {
-        Some(carried) => {
-            carried + shape.translate.get::<Grad<S>>() - seed - shape.translate.value()
+        {
+            Field::Carried
+        } else {
+            Field::Crease(SmoothPair::of(&shape.sdf)?)
+        };
+        if scene.velocity == VelocityField::Carried {
+            return Some(known);
         }
-        None => SmoothPair::of(&shape.sdf)?.motion::<S>(shape, p)?,
-    };
-    vertex_from_motion(shape, p, n, motion)
-}
+        let camera = &scene.camera;
+        let eye = camera.origin.value();
+        let nearest = (eye.clamp(shape.bounds.min, shape.bounds.max) - eye).length();
+        let pixel =
+            2.0 * (0.5 * camera.fov_y.value.to_radians()).tan() / camera.height.max(1) as f32;
+        (shape.sdf.curvature_bound() * nearest * pixel > 1.0).then_some(known)
+    }
 
-/// The attached vertex for the motion `u` (its derivative parts: the primal of `u` is zero up to
-/// rounding), by the formulas of the module docs.
-fn vertex_from_motion<S: Scalar>(
-    shape: &Shape,
-    p: glam::Vec3,
-    n: glam::Vec3,
-    u: Vec3<Grad<S>>,
-) -> Option<Attached<S>> {
-    let c = [u.x, u.y, u.z];
-    let d = Vec3::new(c[0].v, c[1].v, c[2].v);
-    let d = d - d.detach();
-    let jac = |i: usize, j: usize| c[i].g[j] - c[i].g[j].detach();
-    let nv = [n.x, n.y, n.z];
-    let mut div = S::zero();
-    for i in 0..3 {
-        div += jac(i, i);
-        for j in 0..3 {
-            div -= jac(i, j) * (nv[i] * nv[j]);
+    /// The attached vertex of `shape`'s point `p` (normal `n`) moved by this field; `None` where the
+    /// motion or the gradient is undefined.
+    pub fn vertex<S: Scalar>(
+        &self,
+        shape: &Shape,
+        p: glam::Vec3,
+        n: glam::Vec3,
+    ) -> Option<Attached<S>> {
+        let u = match self {
+            Field::Carried => {
+                let seed = Grad::<S>::seed(p - shape.translate.value());
+                shape.sdf.carried(seed)? + shape.translate.get::<Grad<S>>()
+                    - seed
+                    - shape.translate.value()
+            }
+            Field::Crease(pair) => pair.motion::<S>(shape, p)?,
+        };
+        // Only the derivative parts of the motion and its Jacobian: their primals are zero up to
+        // rounding.
+        let c = [u.x, u.y, u.z];
+        let d = Vec3::new(c[0].v, c[1].v, c[2].v);
+        let jac = |i: usize, j: usize| c[i].g[j] - c[i].g[j].detach();
+        let nv = [n.x, n.y, n.z];
+        let mut div = S::zero();
+        for i in 0..3 {
+            div += jac(i, i);
+            for j in 0..3 {
+                div -= jac(i, j) * (nv[i] * nv[j]);
+            }
         }
+        surface_vertex(shape, p, n, d - d.detach(), div)
     }
-    let r = shape.eval::<Grad<S>>(Grad::seed(p));
-    let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
-    let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
-    let gl = g.length();
-    if !(gl > 1e-12 && gl.is_finite()) {
-        return None;
-    }
-    let v = -(r.v - r.v.detach()) / gl;
-    let off_surface = v - d.dot_f32(n);
-    let velocity = d + Vec3::constant(n) * off_surface;
-    // ∇φ at the moving point with the moving parameters, to first order: ∇φ + H ẋ + ∂π∇φ.
-    let h_velocity = Vec3::constant(h.x_axis) * velocity.x
-        + Vec3::constant(h.y_axis) * velocity.y
-        + Vec3::constant(h.z_axis) * velocity.z;
-    let moved = (grad + h_velocity).normalize_or_zero();
-    Some(Attached {
-        x: with_primal(Vec3::constant(p) + velocity, p),
-        n: with_primal(moved, n),
-        j: div + off_surface * curvature(g, h, gl) + 1.0,
-    })
 }
 
 /// A smooth union of two children whose blend is far below their curvature radius (see the
 /// [module docs](self)).
-struct SmoothPair<'a> {
+#[derive(Clone, Debug)]
+pub struct SmoothPair<'a> {
     a: &'a Sdf,
     b: &'a Sdf,
     /// The blend radius `k`.
