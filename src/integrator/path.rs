@@ -86,12 +86,14 @@ pub struct TraceCounters {
 
 /// Whether anything blocks the segment `ray.o + t ray.d`, `t ∈ (0, t_max)`. The emitter `skip` (the one
 /// being connected to) is not tested: its own sampled point faces the reference, so it cannot occlude it.
-/// Exhausted traces count as unoccluded (as misses, like [`Scene::intersect`]).
+/// Nor is the shape `leaving` that the ray leaves ([`Scene::leaving`]). Exhausted traces count as
+/// unoccluded (as misses, like [`Scene::intersect`]).
 pub fn occluded(
     scene: &Scene,
     ray: &Ray,
     t_max: f32,
     skip: Option<usize>,
+    leaving: Option<usize>,
     counters: &mut TraceCounters,
 ) -> bool {
     for &i in &scene.finite_emitters {
@@ -99,7 +101,10 @@ pub fn occluded(
             return true;
         }
     }
-    for shape in &scene.shapes {
+    for (i, shape) in scene.shapes.iter().enumerate() {
+        if Some(i) == leaving {
+            continue;
+        }
         let Some((t0, t1)) = scene.trace_interval(shape, ray, t_max) else {
             continue;
         };
@@ -128,7 +133,12 @@ enum Next {
 /// emitter, or not at all when no emitter is hit and the scene has no environment (a segment that can
 /// carry no light costs no sphere tracing). Equivalent to [`Scene::intersect`] followed by discarding
 /// shape hits.
-fn emission_along(scene: &Scene, ray: &Ray, counters: &mut TraceCounters) -> Next {
+fn emission_along(
+    scene: &Scene,
+    ray: &Ray,
+    leaving: Option<usize>,
+    counters: &mut TraceCounters,
+) -> Next {
     let mut best: Option<(f32, glam::Vec3, usize)> = None;
     for &i in &scene.finite_emitters {
         let t_max = best.map_or(f32::INFINITY, |b| b.0);
@@ -138,7 +148,7 @@ fn emission_along(scene: &Scene, ray: &Ray, counters: &mut TraceCounters) -> Nex
     }
     match best {
         Some((t, n, i)) => {
-            if occluded(scene, ray, t, Some(i), counters) {
+            if occluded(scene, ray, t, Some(i), leaving, counters) {
                 Next::Blocked
             } else {
                 Next::Surface(Hit {
@@ -151,7 +161,7 @@ fn emission_along(scene: &Scene, ray: &Ray, counters: &mut TraceCounters) -> Nex
         }
         None if scene.environment.is_none() => Next::Blocked,
         None => {
-            if occluded(scene, ray, f32::INFINITY, None, counters) {
+            if occluded(scene, ray, f32::INFINITY, None, leaving, counters) {
                 Next::Blocked
             } else {
                 Next::Escape
@@ -220,7 +230,14 @@ pub fn sample_light(
     }
     let ray = Ray::new(o, es.wi);
     let skip = (!infinite).then_some(k);
-    if occluded(scene, &ray, t_max, skip, counters) {
+    if occluded(
+        scene,
+        &ray,
+        t_max,
+        skip,
+        scene.leaving(shape, n, es.wi),
+        counters,
+    ) {
         return None;
     }
     Some(LightVertex {
@@ -271,14 +288,16 @@ pub(crate) fn trace_path_after(
     // The BSDF density (per steradian) of the current ray; `None` for the camera ray.
     let mut bsdf_pdf: Option<f32> = None;
     let mut prev = ray.o;
+    // The convex shape the current ray leaves outward, which it need not trace (`Scene::leaving`).
+    let mut leaving = None;
     let mut scatter = 0;
     loop {
         // After the last scattering vertex only emission along the ray counts.
         let next = if scatter >= max_scatter {
-            emission_along(scene, &ray, counters)
+            emission_along(scene, &ray, leaving, counters)
         } else {
             let found = first.take();
-            match found.unwrap_or_else(|| scene.intersect(&ray, f32::INFINITY)) {
+            match found.unwrap_or_else(|| scene.intersect_leaving(&ray, f32::INFINITY, leaving)) {
                 Intersection::Hit(h) => Next::Surface(h),
                 Intersection::Miss => Next::Escape,
                 Intersection::Exhausted => {
@@ -361,6 +380,7 @@ pub(crate) fn trace_path_after(
                 bsdf_pdf = Some(bs.pdf);
                 prev = h.p;
                 ray = Ray::new(scene.offset_origin(s, h.p, h.n, bs.wi), bs.wi);
+                leaving = scene.leaving(s, h.n, bs.wi);
             }
         }
     }

@@ -145,22 +145,27 @@ impl Aabb {
     ) -> Option<(f32, f32)> {
         // Branch-free (this runs for every shape on every ray): lanes of axes the ray is parallel to
         // are masked out of the slab tests (they do not bound it; their arithmetic is NaN or infinite,
-        // e.g. a ray in a face's plane) and tested against the grown slab directly.
-        let inv = ray.d.recip();
-        let parallel = ray.d.cmpeq(Vec3::ZERO);
-        let ta = (self.min - ray.o) * inv;
-        let tb = (self.max - ray.o) * inv;
-        let lo = Vec3::select(parallel, Vec3::NEG_INFINITY, ta.min(tb));
-        let hi = Vec3::select(parallel, Vec3::INFINITY, ta.max(tb));
+        // e.g. a ray in a face's plane) and tested against the grown slab directly. In SIMD lanes
+        // (`Vec3A`): the same IEEE operations lane by lane as in `Vec3`, so the same interval but for
+        // the sign of a zero end.
+        use glam::Vec3A;
+        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
+        let (min, max) = (Vec3A::from(self.min), Vec3A::from(self.max));
+        let inv = d.recip();
+        let parallel = d.cmpeq(Vec3A::ZERO);
+        let ta = (min - o) * inv;
+        let tb = (max - o) * inv;
+        let lo = Vec3A::select(parallel, Vec3A::NEG_INFINITY, ta.min(tb));
+        let hi = Vec3A::select(parallel, Vec3A::INFINITY, ta.max(tb));
         let entry = t_min.max(lo.max_element());
         let exit = hi.min_element();
         // A ray that misses the box passes closest to it between leaving one slab and entering the next.
         let r = margin(entry.min(exit.max(t_min)));
-        let outside = ray.o.cmplt(self.min - r) | ray.o.cmpgt(self.max + r);
+        let outside = o.cmplt(min - Vec3A::splat(r)) | o.cmpgt(max + Vec3A::splat(r));
         if (parallel & outside).any() {
             return None;
         }
-        let grow = Vec3::select(parallel, Vec3::ZERO, r * inv.abs());
+        let grow = Vec3A::select(parallel, Vec3A::ZERO, r * inv.abs());
         let t0 = t_min.max((lo - grow).max_element());
         let t1 = t_max.min((hi + grow).min_element());
         (t0 <= t1).then_some((t0, t1))

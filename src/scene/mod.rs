@@ -41,6 +41,9 @@ pub struct Shape {
     /// Whether the surface may have crease edges ([`Sdf::creases`]): only next to one can a point pushed
     /// off one face still lie on another ([`Scene::offset_origin`]).
     pub creased: bool,
+    /// Whether the solid is convex ([`Sdf::is_convex`]): a ray leaving its surface outward cannot meet
+    /// it again ([`Scene::leaving`]).
+    pub convex: bool,
     /// Where a grid shape certainly has no surface ([`EmptySpace`]), so that tracing skips it; `None`
     /// for every other shape.
     pub empty_space: Option<Arc<EmptySpace>>,
@@ -60,6 +63,7 @@ impl Shape {
         let bounds = Aabb::new(local.min + t, local.max + t);
         let lipschitz = sdf.lipschitz_sided();
         let creased = sdf.creases().is_some();
+        let convex = sdf.is_convex();
         let empty_space = EmptySpace::of(&sdf).map(Arc::new);
         Self {
             name: name.into(),
@@ -69,6 +73,7 @@ impl Shape {
             bounds,
             lipschitz,
             creased,
+            convex,
             empty_space,
         }
     }
@@ -319,12 +324,34 @@ impl Scene {
     /// The first surface hit by `ray` in `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Intersection {
-        self.intersect_resolving(ray, t_max, f32::INFINITY)
+        self.nearest(ray, t_max, f32::INFINITY, None)
     }
 
     /// [`Scene::intersect`] for a ray that must resolve detail down to `spread · t` at parameter `t`
     /// ([`TraceSettings::spread`]): a camera ray, with [`crate::camera::CameraFrame::spread`].
+    #[inline]
     pub fn intersect_resolving(&self, ray: &Ray, t_max: f32, spread: f32) -> Intersection {
+        self.nearest(ray, t_max, spread, None)
+    }
+
+    /// [`Scene::intersect`] for a ray leaving the surface of shape `leaving` ([`Scene::leaving`]), which
+    /// is then not traced.
+    #[inline]
+    pub fn intersect_leaving(&self, ray: &Ray, t_max: f32, leaving: Option<usize>) -> Intersection {
+        self.nearest(ray, t_max, f32::INFINITY, leaving)
+    }
+
+    /// The shape a ray from a point of shape `shape` (unit normal `n`) in direction `w` need not trace:
+    /// `shape` itself when it is convex and `w` leaves it outward (`n·w > 0`; the ray's origin is then
+    /// pushed off to the outside, [`Scene::offset_origin`], and the solid lies behind the tangent plane
+    /// there), else none. Tracing it would find no crossing but at the level of the float noise.
+    #[inline]
+    pub fn leaving(&self, shape: usize, n: glam::Vec3, w: glam::Vec3) -> Option<usize> {
+        (self.shapes[shape].convex && n.dot(w) > 0.0).then_some(shape)
+    }
+
+    /// The first surface hit by `ray` in `(0, t_max)`, resolving `spread`, skipping shape `leaving`.
+    fn nearest(&self, ray: &Ray, t_max: f32, spread: f32, leaving: Option<usize>) -> Intersection {
         let mut nearest = Nearest {
             t: t_max,
             surface: None,
@@ -347,6 +374,9 @@ impl Scene {
         let mut count = 0;
         let sorted = self.shapes.len() <= MAX_SORTED_SHAPES;
         for (i, shape) in self.shapes.iter().enumerate() {
+            if Some(i) == leaving {
+                continue;
+            }
             let Some((t0, t1)) = self.trace_interval(shape, ray, nearest.t) else {
                 continue;
             };
@@ -559,6 +589,46 @@ mod tests {
                 "hard intersection of unbounded children (planes) whose surfaces cross".to_string()
             )]
         );
+    }
+
+    #[test]
+    fn only_rays_leaving_convex_shapes_outward_skip_them() {
+        let bsdf = Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        };
+        let ring = Sdf::Torus {
+            center: Param3::new([0.0; 3]),
+            axis: glam::Vec3::Y,
+            major_radius: 1.0.into(),
+            minor_radius: 0.25.into(),
+        };
+        let lens = Sdf::Intersection(vec![
+            Sdf::sphere([0.0; 3], 1.0),
+            Sdf::transform(
+                Sdf::sphere([0.0; 3], 1.0),
+                [0.5, 0.0, 0.0],
+                glam::Vec3::Z,
+                30.0,
+                2.0,
+            ),
+        ]);
+        let pair = Sdf::Union(vec![
+            Sdf::sphere([0.0; 3], 1.0),
+            Sdf::sphere([3.0, 0.0, 0.0], 1.0),
+        ]);
+        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf));
+        for (name, sdf) in [("ring", ring), ("lens", lens), ("pair", pair)] {
+            scene.shapes.push(Shape::new(name, sdf, bsdf));
+        }
+        let convex: Vec<bool> = scene.shapes.iter().map(|s| s.convex).collect();
+        assert_eq!(convex, [true, false, true, false]);
+        let (n, out, grazing) = (glam::Vec3::Y, glam::Vec3::new(0.6, 0.8, 0.0), glam::Vec3::X);
+        for i in 0..scene.shapes.len() {
+            let expected = convex[i].then_some(i);
+            assert_eq!(scene.leaving(i, n, out), expected, "shape {i}");
+            assert_eq!(scene.leaving(i, n, -out), None, "shape {i}, entering");
+            assert_eq!(scene.leaving(i, n, grazing), None, "shape {i}, grazing");
+        }
     }
 
     #[test]

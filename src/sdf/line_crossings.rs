@@ -131,6 +131,7 @@ impl Sdf {
 
 /// The crossings of the line `q + t d` (in the box's frame) with the box of half extents `half`, its
 /// edges rounded by `rounding`: the sharp box's slab test, exact where the line meets a flat face.
+#[inline]
 fn box_crossings(
     q: glam::Vec3,
     d: glam::Vec3,
@@ -150,14 +151,21 @@ fn box_crossings(
     if t_in >= t_out {
         return Some(LineCrossings::none(false));
     }
-    let flat = |t: f32, face_axis: usize| {
-        let p = q + t * d;
-        (0..3).all(|j| j == face_axis || p[j].abs() <= half[j] - rounding)
+    // Exact where the point lies within the flat part of every other axis's extent; the face's own
+    // axis is the first whose slab gave the crossing.
+    let inner = half - glam::Vec3::splat(rounding);
+    let flat = |t: f32, slabs: glam::Vec3| {
+        let face = if slabs.x == t {
+            glam::BVec3::new(true, false, false)
+        } else if slabs.y == t {
+            glam::BVec3::new(false, true, false)
+        } else if slabs.z == t {
+            glam::BVec3::new(false, false, true)
+        } else {
+            glam::BVec3::new(true, false, false)
+        };
+        ((q + t * d).abs().cmple(inner) | face).all()
     };
-    let axis_of = |v: glam::Vec3, x: f32| (0..3).find(|&k| v[k] == x).unwrap_or(0);
-    let exact = [
-        flat(t_in, axis_of(lo, t_in)),
-        flat(t_out, axis_of(hi, t_out)),
-    ];
+    let exact = [flat(t_in, lo), flat(t_out, hi)];
     Some(LineCrossings::pair(t_in, t_out, exact))
 }

@@ -625,6 +625,22 @@ impl Sdf {
             child: Box::new(child),
         }
     }
+    /// Whether the solid `φ ≤ 0` is convex whatever the parameters' values: spheres, boxes, cylinders,
+    /// capsules and half-spaces, intersections of convex solids, and transforms of these. A ray leaving
+    /// a convex solid's surface outward cannot meet that solid again (the solid lies behind the tangent
+    /// plane at the ray's origin), so ray queries need not trace it ([`crate::scene::Scene::leaving`]).
+    pub fn is_convex(&self) -> bool {
+        match self {
+            Sdf::Sphere { .. }
+            | Sdf::Box { .. }
+            | Sdf::Cylinder { .. }
+            | Sdf::Capsule { .. }
+            | Sdf::Plane { .. } => true,
+            Sdf::Intersection(children) => children.iter().all(Sdf::is_convex),
+            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.is_convex(),
+            _ => false,
+        }
+    }
     /// The node under any [`Sdf::Named`] wrappers: what to match on when the name does not matter.
     pub fn unnamed(&self) -> &Sdf {
         match self {

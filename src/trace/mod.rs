@@ -571,12 +571,16 @@ fn closed_form(
     if t0.is_nan() || t1.is_nan() || t0 > t1 {
         return None;
     }
-    let origin_magnitude = ray.o.abs().max_element();
     let line = sdf.line_crossings(ray)?;
     let t = &line.t[..line.count];
-    if line.count == 2 {
-        let eps = settings.eps_along(origin_magnitude, t[0].abs().max(t[1].abs()));
-        if t[1] - t[0] < 2.0 * MAX_CREEP * eps {
+    // The common miss of a bounded shape: nothing to check.
+    if t.is_empty() {
+        return Some(([0.0; 2], 0));
+    }
+    let origin_magnitude = ray.o.abs().max_element();
+    if let [a, b] = *t {
+        let eps = settings.eps_along(origin_magnitude, a.abs().max(b.abs()));
+        if b - a < 2.0 * MAX_CREEP * eps {
             return None;
         }
     }

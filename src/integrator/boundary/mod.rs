@@ -201,7 +201,7 @@ pub(crate) fn hidden_before(
     counters: &mut TraceCounters,
 ) -> bool {
     let margin = 4.0 * delta + 8.0 * camera_ray_eps(scene, frame.spread(ray.d), dist);
-    occluded(scene, &ray, dist - margin, None, counters)
+    occluded(scene, &ray, dist - margin, None, None, counters)
 }
 
 /// The background radiance beyond an edge at distance `dist` from the eye, seen along the camera `ray`

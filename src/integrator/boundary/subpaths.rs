@@ -106,6 +106,7 @@ pub fn connect_to_camera(
         &Ray::new(eye, to_x / dist),
         dist - margin,
         None,
+        None,
         counters,
     ) {
         return None;
