@@ -138,11 +138,15 @@ fn box_crossings(
     half: glam::Vec3,
     rounding: f32,
 ) -> Option<LineCrossings> {
+    // In SIMD lanes: the same IEEE operations lane by lane as in `Vec3` (this runs for every box on
+    // every ray).
+    use glam::{BVec3A, Vec3A};
+    let (q, d, half) = (Vec3A::from(q), Vec3A::from(d), Vec3A::from(half));
     let inv = d.recip();
     let ta = (-half - q) * inv;
     let tb = (half - q) * inv;
     // 0·∞ (a line in a face's plane) is undecidable here: the tracer decides.
-    if ta.is_nan_mask().any() || tb.is_nan_mask().any() {
+    if (ta.is_nan_mask() | tb.is_nan_mask()).any() {
         return None;
     }
     let (lo, hi) = (ta.min(tb), ta.max(tb));
@@ -153,16 +157,16 @@ fn box_crossings(
     }
     // Exact where the point lies within the flat part of every other axis's extent; the face's own
     // axis is the first whose slab gave the crossing.
-    let inner = half - glam::Vec3::splat(rounding);
-    let flat = |t: f32, slabs: glam::Vec3| {
+    let inner = half - Vec3A::splat(rounding);
+    let flat = |t: f32, slabs: Vec3A| {
         let face = if slabs.x == t {
-            glam::BVec3::new(true, false, false)
+            BVec3A::new(true, false, false)
         } else if slabs.y == t {
-            glam::BVec3::new(false, true, false)
+            BVec3A::new(false, true, false)
         } else if slabs.z == t {
-            glam::BVec3::new(false, false, true)
+            BVec3A::new(false, false, true)
         } else {
-            glam::BVec3::new(true, false, false)
+            BVec3A::new(true, false, false)
         };
         ((q + t * d).abs().cmple(inner) | face).all()
     };
