@@ -1,5 +1,6 @@
-//! Closed-form crossings (`Sdf::line_crossings`, `first_crossing`, `all_crossings_checked`) against the
-//! exact roots in `f64` and against the sphere tracer they replace: the same crossing to the tracer's
+//! Closed-form crossings (`Sdf::line_crossings`, `first_crossing`, `all_crossings_checked`) of spheres,
+//! planes, boxes and cylinders against the exact roots in `f64` and against the sphere tracer they
+//! replace: the same crossing to the tracer's
 //! tolerance, the same misses, the same answers for rays that start inside, near or on the surface.
 
 use glam::Vec3;
@@ -41,6 +42,16 @@ fn plane(n: Vec3, offset: f32) -> Sdf {
     }
 }
 
+fn cylinder(c: Vec3, axis: Vec3, radius: f32, half_height: f32, rounding: f32) -> Sdf {
+    Sdf::Cylinder {
+        center: Param3::new(c.to_array()),
+        axis: axis.normalize(),
+        radius: Param::new(radius),
+        half_height: Param::new(half_height),
+        rounding: Param::new(rounding),
+    }
+}
+
 fn transformed(child: Sdf, translate: Vec3, axis: Vec3, angle: f32, scale: f32) -> Sdf {
     Sdf::Transform {
         translate: Param3::new(translate.to_array()),
@@ -78,6 +89,32 @@ fn shapes(c: Vec3) -> Vec<(&'static str, Sdf, f32)> {
                 1.3,
             ),
             1.3,
+        ),
+        (
+            "sharp cylinder",
+            cylinder(c, Vec3::new(0.0, 1.0, 0.0), 0.8, 0.6, 0.0),
+            1.0,
+        ),
+        (
+            "rounded tilted cylinder",
+            cylinder(c, Vec3::new(0.3, 1.0, -0.5), 0.7, 0.9, 0.2),
+            1.0,
+        ),
+        (
+            "flat disc",
+            cylinder(c, Vec3::new(1.0, 0.2, 0.1), 1.5, 0.05, 0.02),
+            1.5,
+        ),
+        (
+            "rotated scaled cylinder",
+            transformed(
+                cylinder(Vec3::ZERO, Vec3::Z, 0.5, 1.2, 0.1),
+                c,
+                Vec3::new(-1.0, 0.5, 2.0),
+                71.0,
+                0.8,
+            ),
+            1.0,
         ),
         (
             "named sphere",
@@ -287,4 +324,57 @@ fn rays_skimming_a_plane_to_the_horizon_finish() {
         first_crossing(&floor, 1.0, &below, 0.0, f32::INFINITY, &settings),
         ShapeTrace::Hit(1.25)
     );
+}
+
+/// Regression: a crossing on a rounded edge is the sharp shape's, so the true crossing lies on the
+/// solid's side of it. A ray leaving a rounded box (or cylinder) through its rim with the interval
+/// ending between the true and the sharp exit, or starting in the gap between the sharp and the
+/// rounded corner, once took the closed form's word (a miss, or the exit for the entry).
+#[test]
+fn crossings_on_rounded_edges_near_the_interval_ends_are_traced() {
+    let settings = TraceSettings {
+        eps: 1e-4,
+        ..TraceSettings::default()
+    };
+    let diagonal = Vec3::new(1.0, 1.0, 0.0).normalize();
+    for (name, sdf) in [
+        ("rounded box", cuboid(Vec3::ZERO, Vec3::ONE, 0.25)),
+        (
+            "rounded cylinder",
+            cylinder(Vec3::ZERO, Vec3::Z, 1.0, 1.0, 0.25),
+        ),
+    ] {
+        let lipschitz = sdf.lipschitz();
+        // From the centre out through the rim along the diagonal of the x-y plane (for the cylinder,
+        // along z after a turn: its rim is where the side meets a cap).
+        let d = if name == "rounded box" {
+            diagonal
+        } else {
+            Vec3::new(1.0, 0.0, 1.0).normalize()
+        };
+        let out = Ray::new(Vec3::ZERO, d);
+        let exit = match sphere_trace(&sdf, lipschitz, &out, 0.0, 10.0, &settings) {
+            ShapeTrace::Hit(t) => t,
+            other => panic!("{name}: {other:?}"),
+        };
+        let sharp = sdf.line_crossings(&out).unwrap().t[1];
+        assert!(sharp > exit + 0.05, "{name}: sharp {sharp}, true {exit}");
+        let t1 = 0.5 * (exit + sharp);
+        match first_crossing(&sdf, lipschitz, &out, 0.0, t1, &settings) {
+            ShapeTrace::Hit(t) => assert!((t - exit).abs() < 1e-4, "{name}: {t} vs {exit}"),
+            other => panic!("{name}: leaving through the rim before {t1}: {other:?}"),
+        }
+        // From the gap between the sharp and the rounded rim, inward: the entry comes first.
+        let start = out.at(0.5 * (exit + sharp));
+        assert!(sdf.eval_f32(start) > 0.0);
+        let inward = Ray::new(start, -d);
+        let entry = match sphere_trace(&sdf, lipschitz, &inward, 0.0, 10.0, &settings) {
+            ShapeTrace::Hit(t) => t,
+            other => panic!("{name}: {other:?}"),
+        };
+        match first_crossing(&sdf, lipschitz, &inward, 0.0, 10.0, &settings) {
+            ShapeTrace::Hit(t) => assert!((t - entry).abs() < 1e-4, "{name}: {t} vs {entry}"),
+            other => panic!("{name}: entering from the rim's gap: {other:?}"),
+        }
+    }
 }

@@ -1,5 +1,6 @@
 //! Where a whole line crosses a surface, in closed form, for the nodes that have one: spheres, planes,
-//! boxes (exactly where the line crosses a flat face) and similarity transforms of these.
+//! boxes and cylinders (exactly where the line crosses a flat face or a straight side) and similarity
+//! transforms of these.
 //!
 //! The tracer ([`crate::trace::first_crossing`]) takes these instead of marching when they are certain,
 //! and marches otherwise; the surface is still the SDF's zero set, and derivatives still come from the
@@ -15,6 +16,12 @@
 //!   touches it exactly on the flat part of each face, so a crossing of the sharp box there is a crossing
 //!   of the rounded one; a crossing on a rounded edge or corner is reported as *inexact* (the tracer then
 //!   marches);
+//! - **cylinder** (axis `a`, radius `R`, half height `H`): the line between the caps' planes
+//!   (`|h| ≤ H`, `h = (o − c)·a + t d·a`) and within the infinite cylinder `ρ ≤ R` (the sphere's
+//!   roots above for the line's part across the axis, `f − (f·a) a + t (d − (d·a) a)`, of any length),
+//!   intersected. As for the box, a rounded cylinder lies inside the sharp one and touches it exactly on
+//!   the flat part of the caps (`ρ ≤ R − rounding`) and the straight part of the side
+//!   (`|h| ≤ H − rounding`); a crossing elsewhere is inexact;
 //! - **transform** `x = T + s R p`: the line mapped into the child's frame (`o' = R⁻¹(o − T)/s`,
 //!   `d' = R⁻¹ d / s`: the same parameter `t`).
 
@@ -60,30 +67,16 @@ impl LineCrossings {
 
 impl Sdf {
     /// The crossings of the whole line `ray.o + t ray.d` with the surface `φ = 0`, in closed form, or
-    /// `None` for nodes without one (CSG, grids, tori, cylinders, capsules) or when the arithmetic is
+    /// `None` for nodes without one (CSG, grids, tori, capsules) or when the arithmetic is
     /// not finite. See the `line_crossings` module docs for the formulas.
     pub fn line_crossings(&self, ray: &Ray) -> Option<LineCrossings> {
         let (o, d) = (ray.o, ray.d);
         let crossings = match self {
             Sdf::Sphere { center, radius } => {
-                let r = radius.value;
-                let f = o - center.value();
-                // `a = |d|²`: a direction is a unit vector only to rounding, and the tracer walks the
-                // line as given, so the roots are those of `a t² − 2 b t + c` with `b = −f·d`.
-                let a = d.length_squared();
-                let b = -f.dot(d);
-                let v = f + (b / a) * d;
-                let h2 = (r - v.length()) * (r + v.length()) / a;
-                if h2.is_nan() {
-                    return None;
+                match ball_roots(o - center.value(), d, radius.value)? {
+                    Some((near, far)) => LineCrossings::pair(near, far, [true; 2]),
+                    None => LineCrossings::none(false),
                 }
-                if h2 <= 0.0 {
-                    return Some(LineCrossings::none(false));
-                }
-                let q = b / a + h2.sqrt().copysign(b);
-                let c = (f.length() - r) * (f.length() + r);
-                let (near, far) = (c / (a * q), q);
-                LineCrossings::pair(near.min(far), near.max(far), [true; 2])
             }
             Sdf::Plane { normal, offset } => {
                 let (height, slope) = (normal.dot(o) - offset.value, normal.dot(d));
@@ -121,12 +114,96 @@ impl Sdf {
                 let ray_local = Ray::new(local(o - translate.value()) / s, local(d) / s);
                 child.line_crossings(&ray_local)?
             }
+            Sdf::Cylinder {
+                center,
+                axis,
+                radius,
+                half_height,
+                rounding,
+            } => cylinder_crossings(
+                o - center.value(),
+                d,
+                *axis,
+                [radius.value, half_height.value],
+                rounding.value,
+            )?,
             Sdf::Named { child, .. } => child.line_crossings(ray)?,
             _ => return None,
         };
         let finite = crossings.t[..crossings.count].iter().all(|t| t.is_finite());
         finite.then_some(crossings)
     }
+}
+
+/// The roots `t₀ ≤ t₁` of `|f + t d|² = r²` (`d` of any length), in the stable form of the module docs;
+/// `Some(None)` where the line misses or grazes, `None` where the arithmetic is not finite.
+#[inline]
+fn ball_roots(f: glam::Vec3, d: glam::Vec3, r: f32) -> Option<Option<(f32, f32)>> {
+    // `a = |d|²`: a direction is a unit vector only to rounding, and the tracer walks the line as
+    // given, so the roots are those of `a t² − 2 b t + c` with `b = −f·d`.
+    let a = d.length_squared();
+    let b = -f.dot(d);
+    let v = f + (b / a) * d;
+    let h2 = (r - v.length()) * (r + v.length()) / a;
+    if h2.is_nan() {
+        return None;
+    }
+    if h2 <= 0.0 {
+        return Some(None);
+    }
+    let q = b / a + h2.sqrt().copysign(b);
+    let c = (f.length() - r) * (f.length() + r);
+    let (near, far) = (c / (a * q), q);
+    Some(Some((near.min(far), near.max(far))))
+}
+
+/// The crossings of the line `f + t d` (`f` from the centre) with the cylinder of unit axis `axis`,
+/// `[radius, half height]` `size`, its rims rounded by `rounding`: the sharp cylinder's, exact where the
+/// line meets a flat cap or the straight side (see the module docs).
+#[inline]
+fn cylinder_crossings(
+    f: glam::Vec3,
+    d: glam::Vec3,
+    axis: glam::Vec3,
+    [r, half]: [f32; 2],
+    rounding: f32,
+) -> Option<LineCrossings> {
+    let (h0, dh) = (f.dot(axis), d.dot(axis));
+    let (rf, rd) = (f - h0 * axis, d - dh * axis);
+    // Between the caps' planes; 0/0 (a line in a cap's plane) is undecidable here: the tracer decides.
+    let (ta, tb) = ((-half - h0) / dh, (half - h0) / dh);
+    if ta.is_nan() || tb.is_nan() {
+        return None;
+    }
+    let (cap_in, cap_out) = (ta.min(tb), ta.max(tb));
+    // Within the infinite cylinder: a line parallel to the axis is inside everywhere or nowhere.
+    let (side_in, side_out) = if rd == glam::Vec3::ZERO {
+        if rf.length() > r {
+            return Some(LineCrossings::none(false));
+        }
+        (f32::NEG_INFINITY, f32::INFINITY)
+    } else {
+        match ball_roots(rf, rd, r)? {
+            Some(roots) => roots,
+            None => return Some(LineCrossings::none(false)),
+        }
+    };
+    let (t_in, t_out) = (cap_in.max(side_in), cap_out.min(side_out));
+    if t_in >= t_out {
+        return Some(LineCrossings::none(false));
+    }
+    let exact = |t: f32, on_cap: bool| {
+        if on_cap {
+            (rf + t * rd).length() <= r - rounding
+        } else {
+            (h0 + t * dh).abs() <= half - rounding
+        }
+    };
+    let exact = [
+        exact(t_in, cap_in >= side_in),
+        exact(t_out, cap_out <= side_out),
+    ];
+    Some(LineCrossings::pair(t_in, t_out, exact))
 }
 
 /// The crossings of the line `q + t d` (in the box's frame) with the box of half extents `half`, its

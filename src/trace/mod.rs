@@ -29,12 +29,12 @@
 //!
 //! # Closed forms
 //!
-//! Spheres, planes, boxes and similarity transforms of them have their crossings with a line in closed
-//! form ([`Sdf::line_crossings`]); [`first_crossing`] and [`all_crossings_checked`] take those instead of
+//! Spheres, planes, boxes, cylinders and similarity transforms of them have their crossings with a line
+//! in closed form ([`Sdf::line_crossings`]); [`first_crossing`] and [`all_crossings_checked`] take those instead of
 //! marching wherever the answer is certain, with the conventions below, and fall back to marching where
 //! it is not: a start on the surface (its side is the one the ray moves into, which only probing
 //! decides), a chord shorter than two creep steps (a graze, which marching may skip), a crossing on a
-//! box's rounded edge or corner, or a start within a tolerance of a crossing where the closed form
+//! box's or a cylinder's rounded edge or corner, or a start within a tolerance of a crossing where the closed form
 //! disagrees with the sign of `φ` there (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
 //! steps. [`sphere_trace`] and [`all_hits`] always march.
 //!
@@ -557,8 +557,10 @@ impl<'a> Marcher<'a> {
 /// The crossings of `sdf` along `ray` in `(t0, t1]` from [`Sdf::line_crossings`], or `None` where the
 /// marcher must decide: no closed form, a start on the surface (`|φ(t0)|` at most the on-surface level:
 /// its side is the one the ray moves into, which the marcher probes), a chord shorter than two creep
-/// steps (a graze, which the marcher may skip), a crossing on a box's rounded edge, or a start within a
-/// tolerance of a crossing where the closed form disagrees with the sign of `φ(t0)`. With `first_only`,
+/// steps (a graze, which the marcher may skip), a crossing on a rounded edge within `(t0, t1]` (or an
+/// entry there behind `t0`, or an exit there beyond `t1`: the true crossing may lie on the other side
+/// of the interval's end), or a start within a tolerance of a crossing where the closed form disagrees
+/// with the sign of `φ(t0)`. With `first_only`,
 /// only the first crossing is wanted.
 fn closed_form(
     sdf: &Sdf,
@@ -597,9 +599,21 @@ fn closed_form(
             return None;
         }
     }
+    // An inexact crossing (on a rounded edge) is the sharp shape's: the true one lies on the solid's
+    // side of it, later for an entry and earlier for an exit. So an inexact entry behind `t0` may still
+    // be ahead (the ray may start outside), and an inexact exit beyond `t1` may still be within reach:
+    // only the marcher can tell.
+    let uncertain =
+        |k: usize, exit: bool| !line.exact[k] && exit == (line.inside_before ^ (k % 2 == 1));
+    if (0..behind).any(|k| uncertain(k, false)) {
+        return None;
+    }
     let mut found = ([0.0; 2], 0);
     for (k, &t) in t.iter().enumerate().skip(behind) {
         if t > t1 {
+            if uncertain(k, true) {
+                return None;
+            }
             break;
         }
         if !line.exact[k] {
@@ -616,7 +630,8 @@ fn closed_form(
 
 /// First zero crossing of `sdf` along `ray` in `[t0, t1]`, with the conventions of [`sphere_trace`]:
 /// from the closed form where the surface has one and the answer is certain (spheres, planes, the flat
-/// faces of boxes, transforms of these: [`Sdf::line_crossings`]), by sphere tracing otherwise.
+/// faces of boxes and cylinders, the straight sides of cylinders, transforms of these:
+/// [`Sdf::line_crossings`]), by sphere tracing otherwise.
 pub fn first_crossing(
     sdf: &Sdf,
     lipschitz: impl Into<Lipschitz>,
