@@ -623,8 +623,8 @@ mod tests {
         let convex: Vec<bool> = scene.shapes.iter().map(|s| s.convex).collect();
         assert_eq!(convex, [true, false, true, false]);
         let (n, out, grazing) = (glam::Vec3::Y, glam::Vec3::new(0.6, 0.8, 0.0), glam::Vec3::X);
-        for i in 0..scene.shapes.len() {
-            let expected = convex[i].then_some(i);
+        for (i, &is_convex) in convex.iter().enumerate() {
+            let expected = is_convex.then_some(i);
             assert_eq!(scene.leaving(i, n, out), expected, "shape {i}");
             assert_eq!(scene.leaving(i, n, -out), None, "shape {i}, entering");
             assert_eq!(scene.leaving(i, n, grazing), None, "shape {i}, grazing");

@@ -30,12 +30,14 @@
 //! # Closed forms
 //!
 //! Spheres, planes, boxes, cylinders and similarity transforms of them have their crossings with a line
-//! in closed form ([`Sdf::line_crossings`]); [`first_crossing`] and [`all_crossings_checked`] take those instead of
-//! marching wherever the answer is certain, with the conventions below, and fall back to marching where
-//! it is not: a start on the surface (its side is the one the ray moves into, which only probing
-//! decides), a chord shorter than two creep steps (a graze, which marching may skip), a crossing on a
-//! box's or a cylinder's rounded edge or corner, or a start within a tolerance of a crossing where the closed form
-//! disagrees with the sign of `φ` there (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
+//! in closed form ([`Sdf::line_crossings`]); [`first_crossing`] and [`all_crossings_checked`] take those
+//! instead of marching wherever the answer is certain, with the conventions below, and fall back to
+//! marching where it is not: a start on the surface (its side is the one the ray moves into, which only
+//! probing decides), a chord shorter than two creep steps (a graze, which marching may skip), a crossing
+//! on a box's or a cylinder's rounded edge or corner (the sharp shape's crossing: the true one lies on
+//! the solid's side of it, so it also counts behind the interval's start for an entry and beyond its
+//! end for an exit), or a start within a tolerance of a crossing where the closed form disagrees with
+//! the sign of `φ` there (rounding). Rays towards the horizon over a plane then cost nothing instead of running out of
 //! steps. [`sphere_trace`] and [`all_hits`] always march.
 //!
 //! # Tolerances
@@ -560,8 +562,7 @@ impl<'a> Marcher<'a> {
 /// steps (a graze, which the marcher may skip), a crossing on a rounded edge within `(t0, t1]` (or an
 /// entry there behind `t0`, or an exit there beyond `t1`: the true crossing may lie on the other side
 /// of the interval's end), or a start within a tolerance of a crossing where the closed form disagrees
-/// with the sign of `φ(t0)`. With `first_only`,
-/// only the first crossing is wanted.
+/// with the sign of `φ(t0)`. With `first_only`, only the first crossing is wanted.
 fn closed_form(
     sdf: &Sdf,
     ray: &Ray,
