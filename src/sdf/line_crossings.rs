@@ -158,8 +158,8 @@ fn ball_roots(f: glam::Vec3, d: glam::Vec3, r: f32) -> Option<Option<(f32, f32)>
 }
 
 /// The crossings of the line `f + t d` (`f` from the centre) with the cylinder of unit axis `axis`,
-/// `[radius, half height]` `size`, its rims rounded by `rounding`: the sharp cylinder's, exact where the
-/// line meets a flat cap or the straight side (see the module docs).
+/// radius and half height `[r, half]`, its rims rounded by `rounding`: the sharp cylinder's, exact where
+/// the line meets a flat cap or the straight side (see the module docs).
 #[inline]
 fn cylinder_crossings(
     f: glam::Vec3,
