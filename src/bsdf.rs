@@ -1,6 +1,7 @@
 //! Surface scattering. Directions point away from the surface; `n` is the outward unit normal.
 
-use crate::error::{Error, FieldPath, RGB};
+use crate::declare::{Components, Family, Field, Kind, Rule, Value, on};
+use crate::error::{Error, FieldPath};
 use crate::math::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{Frame, Vec3};
 use crate::scalar::{Param3, Scalar};
@@ -27,22 +28,9 @@ pub struct BsdfSample {
 
 impl Bsdf {
     /// The broken rules of the BSDF's fields (an albedo in `[0, 1]`), named by `at`; empty when valid.
+    /// The rules are the material kind's declaration ([`crate::declare::Kind`]).
     pub fn validate(&self, at: FieldPath) -> Vec<Error> {
-        let mut out = Vec::new();
-        match self {
-            Bsdf::Diffuse { albedo } => {
-                let ok = |x: f32| (0.0..=1.0).contains(&x);
-                at.check_each(
-                    &mut out,
-                    "albedo",
-                    &RGB,
-                    albedo.value(),
-                    ok,
-                    "must be in [0, 1]",
-                );
-            }
-        }
-        out
+        crate::declare::violations(self, at)
     }
 
     /// `f(wi, wo)` (without the cosine), generic.
@@ -108,3 +96,36 @@ impl Bsdf {
         }
     }
 }
+
+/// Every material kind ([`crate::declare`]), in the order the scene file's errors list them.
+const KINDS: &[&Kind<Bsdf>] = &[&DIFFUSE];
+
+impl Family for Bsdf {
+    fn kinds() -> &'static [&'static Kind<Bsdf>] {
+        KINDS
+    }
+
+    fn kind(&self) -> &'static Kind<Bsdf> {
+        match self {
+            Bsdf::Diffuse { .. } => &DIFFUSE,
+        }
+    }
+}
+
+/// `{"type": "diffuse", "albedo": [r, g, b]}` (each in `[0, 1]`).
+const DIFFUSE: Kind<Bsdf> = Kind {
+    type_name: "diffuse",
+    fields: &[Field {
+        key: "albedo",
+        value: Value::Vector {
+            access: on!(Bsdf::Diffuse { albedo } => albedo),
+            components: Components::Rgb,
+            default: None,
+            rule: Rule::UnitInterval,
+        },
+    }],
+    blank: || Bsdf::Diffuse {
+        albedo: Param3::from(glam::Vec3::ZERO),
+    },
+    example: r#"{"type": "diffuse", "albedo": [0.6, 0.5, 0.3]}"#,
+};

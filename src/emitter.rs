@@ -4,7 +4,8 @@
 //! moves with its parameters, its outline, the scene rules on its fields), so a new kind is added in
 //! this file and the scene parser rather than in every consumer.
 
-use crate::error::{Error, FieldPath, RGB, XYZ};
+use crate::declare::{Components, Family, Field, Kind, Rule, Value, on};
+use crate::error::{Error, FieldPath};
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
 use crate::math::{Aabb, Frame, Ray, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
@@ -262,35 +263,13 @@ impl Emitter {
         }
     }
 
-    /// The broken scene rules of the emitter's fields (a radiance `>= 0`, sizes and radius `> 0`),
-    /// named by `at` (the emitter's path or parameter prefix), in a fixed order; empty when valid.
+    /// The broken scene rules of the emitter's fields (sizes and radius `> 0`, a radiance `>= 0`),
+    /// named by `at` (the emitter's path or parameter prefix), in a fixed order; empty when valid. The
+    /// rules are the emitter kind's declaration ([`crate::declare::Kind`]).
     ///
     /// Directions (`normal`, `u`) are checked where they are read: they are not parameters.
     pub fn validate(&self, at: FieldPath) -> Vec<Error> {
-        let mut out = Vec::new();
-        let radiance = self.radiance().value();
-        at.check_each(
-            &mut out,
-            "radiance",
-            &RGB,
-            radiance,
-            |x| x >= 0.0,
-            "must be >= 0",
-        );
-        match self {
-            Emitter::Rectangle { size, .. } => {
-                for (i, s) in size.iter().enumerate() {
-                    let field = at.element("size", i, &XYZ);
-                    at.check(&mut out, s.value > 0.0, field, "must be > 0", s.value);
-                }
-            }
-            Emitter::Sphere { radius, .. } => {
-                let r = radius.value;
-                at.check(&mut out, r > 0.0, at.field("radius"), "must be > 0", r);
-            }
-            Emitter::Constant { .. } => {}
-        }
-        out
+        crate::declare::violations(self, at)
     }
 
     /// Surface area of a finite emitter (`∞` for the environment).
@@ -561,3 +540,143 @@ impl Emitter {
         matches!(self, Emitter::Constant { .. })
     }
 }
+
+/// Every emitter kind ([`crate::declare`]), in the order the scene file's errors list them.
+const KINDS: &[&Kind<Emitter>] = &[&RECTANGLE, &SPHERE, &CONSTANT];
+
+impl Family for Emitter {
+    fn kinds() -> &'static [&'static Kind<Emitter>] {
+        KINDS
+    }
+
+    fn kind(&self) -> &'static Kind<Emitter> {
+        match self {
+            Emitter::Rectangle { .. } => &RECTANGLE,
+            Emitter::Sphere { .. } => &SPHERE,
+            Emitter::Constant { .. } => &CONSTANT,
+        }
+    }
+}
+
+/// An emitter's `center`.
+const fn center(access: crate::declare::Access<Emitter, Param3>) -> Field<Emitter> {
+    Field {
+        key: "center",
+        value: Value::Vector {
+            access,
+            components: Components::Xyz,
+            default: None,
+            rule: Rule::Any,
+        },
+    }
+}
+
+/// An emitter's `radiance` (linear RGB, `>= 0`).
+const fn radiance(access: crate::declare::Access<Emitter, Param3>) -> Field<Emitter> {
+    Field {
+        key: "radiance",
+        value: Value::Vector {
+            access,
+            components: Components::Rgb,
+            default: None,
+            rule: Rule::NonNegative,
+        },
+    }
+}
+
+fn zero3() -> Param3 {
+    Param3::from(glam::Vec3::ZERO)
+}
+
+/// `{"type": "rectangle", "name", "center", "normal", "u", "size": [along u, along normal × u],
+/// "radiance"}`.
+const RECTANGLE: Kind<Emitter> = Kind {
+    type_name: "rectangle",
+    fields: &[
+        center(on!(Emitter::Rectangle { center, .. } => center)),
+        Field {
+            key: "normal",
+            value: Value::Direction {
+                access: on!(Emitter::Rectangle { normal, .. } => normal),
+                after: None,
+            },
+        },
+        Field {
+            key: "u",
+            value: Value::Direction {
+                access: on!(Emitter::Rectangle { u, .. } => u),
+                after: Some(in_rectangle_plane),
+            },
+        },
+        Field {
+            key: "size",
+            value: Value::Pair {
+                access: on!(Emitter::Rectangle { size, .. } => size),
+                rule: Rule::Positive,
+            },
+        },
+        radiance(on!(Emitter::Rectangle { radiance, .. } => radiance)),
+    ],
+    blank: || Emitter::Rectangle {
+        center: zero3(),
+        normal: glam::Vec3::Y,
+        u: glam::Vec3::X,
+        size: [Param::new(0.0), Param::new(0.0)],
+        radiance: zero3(),
+    },
+    example: r#"{"type": "rectangle", "name": "example", "center": [0, 3, 0], "normal": [0, -1, 0], "u": [1, 0, 0], "size": [1, 0.5], "radiance": [5, 5, 5]}"#,
+};
+
+/// Gram–Schmidt: keeps the rectangle in the plane given by `normal`, with its first edge as close to
+/// the given `u` as possible. A `u` within ~0.06° of the normal has no such direction.
+fn in_rectangle_plane(e: &mut Emitter) -> Result<(), String> {
+    let Emitter::Rectangle { normal, u, .. } = e else {
+        unreachable!("a rectangle's rule")
+    };
+    let u_perp = *u - *normal * normal.dot(*u);
+    match u_perp.try_normalize().filter(|_| u_perp.length() > 1e-3) {
+        Some(v) => {
+            *u = v;
+            Ok(())
+        }
+        None => {
+            let fmt = |v: glam::Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+            Err(format!(
+                "must not be parallel to normal {}, got {}",
+                fmt(*normal),
+                fmt(*u)
+            ))
+        }
+    }
+}
+
+/// `{"type": "sphere", "name", "center", "radius", "radiance"}`.
+const SPHERE: Kind<Emitter> = Kind {
+    type_name: "sphere",
+    fields: &[
+        center(on!(Emitter::Sphere { center, .. } => center)),
+        Field {
+            key: "radius",
+            value: Value::Number {
+                access: on!(Emitter::Sphere { radius, .. } => radius),
+                default: None,
+                rule: Rule::Positive,
+            },
+        },
+        radiance(on!(Emitter::Sphere { radiance, .. } => radiance)),
+    ],
+    blank: || Emitter::Sphere {
+        center: zero3(),
+        radius: Param::new(0.0),
+        radiance: zero3(),
+    },
+    example: r#"{"type": "sphere", "name": "example", "center": [1.5, 3, 2], "radius": 0.3, "radiance": [30, 30, 30]}"#,
+};
+
+/// `{"type": "constant", "name", "radiance"}`: radiance arriving from every direction.
+const CONSTANT: Kind<Emitter> = Kind {
+    type_name: "constant",
+    fields: &[radiance(on!(Emitter::Constant { radiance } => radiance))],
+    blank: || Emitter::Constant { radiance: zero3() },
+    example: r#"{"type": "constant", "name": "example", "radiance": [0.3, 0.3, 0.3]}"#,
+};

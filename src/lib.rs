@@ -13,6 +13,7 @@
 pub mod bsdf;
 pub mod camera;
 pub mod compare;
+pub mod declare;
 pub mod emitter;
 pub mod error;
 pub mod film;

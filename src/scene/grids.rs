@@ -5,6 +5,7 @@
 
 use super::params::root_prefix;
 use super::{Scene, Shape};
+use crate::declare;
 use crate::error::{Error, Result};
 use crate::scalar::GridValues;
 use crate::sdf::{GridData, Sdf};
@@ -58,40 +59,27 @@ pub struct GridDirection {
 }
 
 /// Generates the walk over the grid nodes of an sdf tree, shared or mutable: `f(prefix, data, selection)`
-/// with the node prefixes of [`Scene::parameters`].
+/// with the node prefixes of [`Scene::parameters`] (the tree walk of the node declarations).
 macro_rules! grid_walk {
-    ($walk:ident $(, $m:tt)?) => {
+    ($walk:ident, $tree:ident $(, $m:tt)?) => {
         fn $walk(
             sdf: &$($m)? Sdf,
             prefix: &str,
             f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? GridValues, [glam::Vec3; 2]),
         ) {
-            match sdf {
-                Sdf::Grid {
+            declare::$tree(sdf, prefix, &mut |prefix, node| {
+                if let Sdf::Grid {
                     data, selection, bbox_min, bbox_max, ..
-                } => f(prefix, data, selection, [*bbox_min, *bbox_max]),
-                Sdf::Union(children)
-                | Sdf::Intersection(children)
-                | Sdf::Difference(children)
-                | Sdf::SmoothUnion { children, .. } => {
-                    for (i, c) in IntoIterator::into_iter(children).enumerate() {
-                        $walk(c, &format!("{prefix}.children.{i}"), f);
-                    }
+                } = node
+                {
+                    f(prefix, data, selection, [*bbox_min, *bbox_max]);
                 }
-                Sdf::Transform { child, .. } => $walk(child, &format!("{prefix}.child"), f),
-                Sdf::Named { name, child } => $walk(child, name, f),
-                Sdf::Sphere { .. }
-                | Sdf::Box { .. }
-                | Sdf::Torus { .. }
-                | Sdf::Cylinder { .. }
-                | Sdf::Capsule { .. }
-                | Sdf::Plane { .. } => {}
-            }
+            });
         }
     };
 }
-grid_walk!(walk);
-grid_walk!(walk_mut, mut);
+grid_walk!(walk, walk);
+grid_walk!(walk_mut, walk_mut, mut);
 
 impl Sdf {
     /// Whether some grid in the tree has its values selected for differentiation.

@@ -12,16 +12,16 @@ use super::integrator_kind::IntegratorKind;
 use super::{NamedEmitter, Scene, Shape};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
+use crate::declare::{self, Family, Kind};
 use crate::emitter::Emitter;
 use crate::error::{Error, FieldPath, Result};
 use crate::film::Filter;
-use crate::scalar::{GridValues, Param, Param3};
-use crate::sdf::{AngleTrig, GridData, Sdf, read_npy};
+use crate::scalar::{Param, Param3};
+use crate::sdf::Sdf;
 use glam::Vec3;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::Arc;
 
 /// Default samples per pixel when the scene gives none.
 pub const DEFAULT_SPP: u32 = 64;
@@ -41,23 +41,6 @@ pub(crate) const SCENE_KEYS: &[&str] = &[
     "emitters",
 ];
 
-/// The sdf node types, in the order error messages list them.
-const SDF_TYPES: &[&str] = &[
-    "sphere",
-    "box",
-    "torus",
-    "cylinder",
-    "capsule",
-    "plane",
-    "union",
-    "intersection",
-    "difference",
-    "smooth_union",
-    "transform",
-    "grid",
-];
-const BSDF_TYPES: &[&str] = &["diffuse"];
-const EMITTER_TYPES: &[&str] = &["rectangle", "sphere", "constant"];
 const INTEGRATOR_TYPES: &[&str] = &["direct", "path"];
 const FILTERS: &[&str] = &["tent", "gaussian", "box"];
 /// Prefix of the camera's parameter names, so no shape, emitter or node may use it.
@@ -494,35 +477,23 @@ impl Context<'_> {
         let name = o.string("name")?;
         self.name(name, o.at("name"))?;
         let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?;
-        let bsdf = bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
+        let bsdf = self.bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
         let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
         Ok((name.to_string(), sdf, bsdf, translate))
     }
 
     fn sdf(&mut self, v: &Value, path: &str) -> Result<Sdf> {
-        let ty = Obj::tag(v, path, "type", SDF_TYPES)?;
+        let kind = kind_of::<Sdf>(v, path)?;
         // Every node accepts "type" and "name" besides its own fields.
-        let fields: &[&str] = match ty {
-            "sphere" => &["center", "radius"],
-            "box" => &["center", "half_size", "rounding"],
-            "torus" => &["center", "axis", "major_radius", "minor_radius"],
-            "cylinder" => &["center", "axis", "radius", "half_height", "rounding"],
-            "capsule" => &["a", "b", "radius"],
-            "plane" => &["normal", "offset"],
-            "union" | "intersection" | "difference" => &["children"],
-            "smooth_union" => &["children", "k"],
-            "transform" => &["translate", "rotate", "scale", "child"],
-            "grid" => &["file", "bbox_min", "bbox_max", "level"],
-            _ => unreachable!("tag checked against SDF_TYPES"),
-        };
-        let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
-        let o = Obj::new(v, path.to_string(), &allowed)?;
+        let o = Obj::new(v, path.to_string(), &keys(kind, &["type", "name"]))?;
         let name = o.opt_string("name")?;
         if let Some(name) = name {
             self.name(name, o.at("name"))?;
         }
-        let node = self.sdf_node(ty, &o)?;
-        valid(node.validate(FieldPath::Json(&o.path)))?;
+        let mut node = (kind.blank)();
+        self.fields(kind, &o, &mut node, Self::sdf)?;
+        // A transform keeps the sine and cosine of its angle, computed from the angle just read.
+        let node = node.refreshed();
         // The name is kept (as a wrapper that delegates everything) because parameter names key on it.
         Ok(match name {
             Some(name) => Sdf::named(name, node),
@@ -530,206 +501,152 @@ impl Context<'_> {
         })
     }
 
-    /// The node of type `ty` read from `o` (its keys already checked), without its name; its field
-    /// rules are not checked yet.
-    fn sdf_node(&mut self, ty: &str, o: &Obj) -> Result<Sdf> {
-        let p3 = |x: Vec3| Param3::from(x);
-        Ok(match ty {
-            "sphere" => Sdf::Sphere {
-                center: p3(o.vec3("center")?),
-                radius: o.f32("radius")?.into(),
-            },
-            "box" => Sdf::Box {
-                center: p3(o.vec3("center")?),
-                half_size: p3(o.vec3("half_size")?),
-                rounding: o.opt_f32("rounding")?.unwrap_or(0.0).into(),
-            },
-            "torus" => Sdf::Torus {
-                center: p3(o.vec3("center")?),
-                axis: o.direction("axis")?,
-                major_radius: o.f32("major_radius")?.into(),
-                minor_radius: o.f32("minor_radius")?.into(),
-            },
-            "cylinder" => Sdf::Cylinder {
-                center: p3(o.vec3("center")?),
-                axis: o.direction("axis")?,
-                radius: o.f32("radius")?.into(),
-                half_height: o.f32("half_height")?.into(),
-                rounding: o.opt_f32("rounding")?.unwrap_or(0.0).into(),
-            },
-            "capsule" => Sdf::Capsule {
-                a: p3(o.vec3("a")?),
-                b: p3(o.vec3("b")?),
-                radius: o.f32("radius")?.into(),
-            },
-            "plane" => Sdf::Plane {
-                normal: o.direction("normal")?,
-                offset: o.f32("offset")?.into(),
-            },
-            "union" => Sdf::Union(self.children(o)?),
-            "intersection" => Sdf::Intersection(self.children(o)?),
-            "difference" => Sdf::Difference(self.children(o)?),
-            "smooth_union" => {
-                let k = o.f32("k")?;
-                Sdf::SmoothUnion {
-                    children: self.children(o)?,
-                    k: k.into(),
-                }
-            }
-            "transform" => self.transform(o)?,
-            "grid" => self.grid(o)?,
-            _ => unreachable!("tag checked against SDF_TYPES"),
-        })
-    }
-
-    fn children(&mut self, o: &Obj) -> Result<Vec<Sdf>> {
-        let list = o.array("children")?;
-        if list.is_empty() {
-            return Err(Error::field(
-                o.at("children"),
-                "must hold at least one node, got an empty array",
-            ));
-        }
-        list.iter()
-            .enumerate()
-            .map(|(i, c)| self.sdf(c, &format!("{}[{i}]", o.at("children"))))
-            .collect()
-    }
-
-    fn transform(&mut self, o: &Obj) -> Result<Sdf> {
-        let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
-        let scale = o.opt_f32("scale")?.unwrap_or(1.0);
-        let (axis, angle) = match o.get("rotate") {
-            None => (Vec3::Y, 0.0),
-            Some(r) => {
-                let r = Obj::new(r, o.at("rotate"), &["axis", "angle"])?;
-                (r.direction("axis")?, r.f32("angle")?)
-            }
-        };
-        let child = self.sdf(o.req("child")?, &o.at("child"))?;
-        Ok(Sdf::Transform {
-            translate: translate.into(),
-            axis,
-            angle: Param::new(angle),
-            trig: AngleTrig::of(angle),
-            scale: scale.into(),
-            child: Box::new(child),
-        })
-    }
-
-    fn grid(&mut self, o: &Obj) -> Result<Sdf> {
-        let bbox_min = o.vec3("bbox_min")?;
-        let bbox_max = o.vec3("bbox_max")?;
-        if !bbox_max.cmpgt(bbox_min).all() {
-            return Err(Error::field(
-                o.at("bbox_max"),
-                format!(
-                    "must exceed bbox_min {} in every component, got {}",
-                    fmt3(bbox_min),
-                    fmt3(bbox_max)
-                ),
-            ));
-        }
-        let field = o.at("file");
-        let file = self.base_dir.join(o.string("file")?);
-        if !file.is_file() {
-            return Err(Error::field(
-                field,
-                format!("grid file {} not found", file.display()),
-            ));
-        }
-        let data = read_npy(&file).map_err(|e| {
-            // The reader's own message names the file already when it is a file error.
-            let message = match e {
-                Error::File { message, .. } => message,
-                e => e.to_string(),
-            };
-            Error::field(
-                field.clone(),
-                format!("grid file {}: {message}", file.display()),
-            )
-        })?;
-        check_grid(&data).map_err(|message| {
-            Error::field(
-                field.clone(),
-                format!("grid file {}: {message}", file.display()),
-            )
-        })?;
-        Ok(Sdf::Grid {
-            data: Arc::new(data),
-            bbox_min,
-            bbox_max,
-            level: Param::new(o.opt_f32("level")?.unwrap_or(0.0)),
-            selection: GridValues::Constant,
-        })
-    }
-
     fn emitter(&mut self, v: &Value, path: &str) -> Result<NamedEmitter> {
-        let ty = Obj::tag(v, path, "type", EMITTER_TYPES)?;
-        let fields: &[&str] = match ty {
-            "rectangle" => &["center", "normal", "u", "size", "radiance"],
-            "sphere" => &["center", "radius", "radiance"],
-            "constant" => &["radiance"],
-            _ => unreachable!("tag checked against EMITTER_TYPES"),
-        };
-        let allowed: Vec<&str> = ["type", "name"].iter().chain(fields).copied().collect();
-        let o = Obj::new(v, path.to_string(), &allowed)?;
+        let kind = kind_of::<Emitter>(v, path)?;
+        let o = Obj::new(v, path.to_string(), &keys(kind, &["type", "name"]))?;
         let name = o.string("name")?;
         self.name(name, o.at("name"))?;
-        let radiance = Param3::from(o.vec3("radiance")?);
-        let emitter = match ty {
-            "rectangle" => {
-                let normal = o.direction("normal")?;
-                let u = o.direction("u")?;
-                // Gram–Schmidt: keep the rectangle in the plane given by `normal`, with its first edge
-                // as close to `u` as possible. A `u` within ~0.06° of the normal has no such direction.
-                let u_perp = u - normal * normal.dot(u);
-                let Some(u) = u_perp.try_normalize().filter(|_| u_perp.length() > 1e-3) else {
-                    return Err(Error::field(
-                        o.at("u"),
-                        format!(
-                            "must not be parallel to normal {}, got {}",
-                            fmt3(normal),
-                            fmt3(u)
-                        ),
-                    ));
-                };
-                let size = o.req("size")?;
-                let size_path = o.at("size");
-                let size = match size {
-                    Value::Array(a) if a.len() == 2 => [
-                        number(&a[0], &format!("{size_path}[0]"))?,
-                        number(&a[1], &format!("{size_path}[1]"))?,
-                    ],
-                    other => {
-                        return Err(Error::field(
-                            size_path,
-                            format!("expected an array of 2 numbers, got {}", describe(other)),
-                        ));
-                    }
-                };
-                Emitter::Rectangle {
-                    center: o.vec3("center")?.into(),
-                    normal,
-                    u,
-                    size: [size[0].into(), size[1].into()],
-                    radiance,
-                }
-            }
-            "sphere" => Emitter::Sphere {
-                center: o.vec3("center")?.into(),
-                radius: o.f32("radius")?.into(),
-                radiance,
-            },
-            "constant" => Emitter::Constant { radiance },
-            _ => unreachable!("tag checked against EMITTER_TYPES"),
-        };
-        valid(emitter.validate(FieldPath::Json(path)))?;
+        let mut emitter = (kind.blank)();
+        self.fields(kind, &o, &mut emitter, |_, _, _| {
+            unreachable!("emitters have no child nodes")
+        })?;
         Ok(NamedEmitter {
             name: name.to_string(),
             emitter,
         })
     }
+
+    fn bsdf(&mut self, v: &Value, path: &str) -> Result<Bsdf> {
+        let kind = kind_of::<Bsdf>(v, path)?;
+        let o = Obj::new(v, path.to_string(), &keys(kind, &["type"]))?;
+        let mut bsdf = (kind.blank)();
+        self.fields(kind, &o, &mut bsdf, Self::bsdf)?;
+        Ok(bsdf)
+    }
+
+    /// Reads the fields `kind` declares from `o` (its keys already checked) into `node`, in the
+    /// declaration's order, then checks the node's rules. `child` reads a child node.
+    fn fields<N: Family>(
+        &mut self,
+        kind: &Kind<N>,
+        o: &Obj,
+        node: &mut N,
+        child: fn(&mut Self, &Value, &str) -> Result<N>,
+    ) -> Result<()> {
+        for field in kind.fields {
+            let key = field.key;
+            match &field.value {
+                declare::Value::Number {
+                    access, default, ..
+                } => {
+                    let v = match default {
+                        Some(d) => o.opt_f32(key)?.unwrap_or(*d),
+                        None => o.f32(key)?,
+                    };
+                    *(access.get_mut)(node) = Param::new(v);
+                }
+                declare::Value::Vector {
+                    access, default, ..
+                } => {
+                    let v = match default {
+                        Some(d) => o.opt_vec3(key)?.unwrap_or(Vec3::splat(*d)),
+                        None => o.vec3(key)?,
+                    };
+                    *(access.get_mut)(node) = Param3::from(v);
+                }
+                declare::Value::Pair { access, .. } => {
+                    let at = o.at(key);
+                    let pair = match o.req(key)? {
+                        Value::Array(a) if a.len() == 2 => [
+                            number(&a[0], &format!("{at}[0]"))?,
+                            number(&a[1], &format!("{at}[1]"))?,
+                        ],
+                        other => {
+                            return Err(Error::field(
+                                at,
+                                format!("expected an array of 2 numbers, got {}", describe(other)),
+                            ));
+                        }
+                    };
+                    *(access.get_mut)(node) = pair.map(Param::new);
+                }
+                declare::Value::Direction { access, after } => {
+                    *(access.get_mut)(node) = o.direction(key)?;
+                    if let Some(after) = after {
+                        after(node).map_err(|m| Error::field(o.at(key), m))?;
+                    }
+                }
+                declare::Value::Fixed { access, after } => {
+                    *(access.get_mut)(node) = o.vec3(key)?;
+                    if let Some(after) = after {
+                        after(node).map_err(|m| Error::field(o.at(key), m))?;
+                    }
+                }
+                declare::Value::Rotation { axis, angle } => {
+                    let (a, degrees) = match o.get(key) {
+                        None => (Vec3::Y, 0.0),
+                        Some(r) => {
+                            let r = Obj::new(r, o.at(key), &["axis", "angle"])?;
+                            (r.direction("axis")?, r.f32("angle")?)
+                        }
+                    };
+                    *(axis.get_mut)(node) = a;
+                    *(angle.get_mut)(node) = Param::new(degrees);
+                }
+                declare::Value::Child(access) => {
+                    *(access.get_mut)(node) = child(self, o.req(key)?, &o.at(key))?;
+                }
+                declare::Value::Children(access) => {
+                    let at = o.at(key);
+                    let list = o.array(key)?;
+                    if list.is_empty() {
+                        return Err(Error::field(
+                            at,
+                            "must hold at least one node, got an empty array",
+                        ));
+                    }
+                    let children = (list.iter().enumerate())
+                        .map(|(i, c)| child(self, c, &format!("{at}[{i}]")))
+                        .collect::<Result<Vec<N>>>()?;
+                    *(access.get_mut)(node) = children;
+                }
+                // Read last, once the other fields are known to be valid (a file can be large).
+                declare::Value::File { .. } => {}
+            }
+        }
+        valid(declare::violations(node, FieldPath::Json(&o.path)))?;
+        for field in kind.fields {
+            if let declare::Value::File { load } = &field.value {
+                let key = field.key;
+                let at = o.at(key);
+                let file = self.base_dir.join(o.string(key)?);
+                let what = kind.type_name;
+                if !file.is_file() {
+                    return Err(Error::field(
+                        at,
+                        format!("{what} file {} not found", file.display()),
+                    ));
+                }
+                load(node, &file).map_err(|message| {
+                    Error::field(at, format!("{what} file {}: {message}", file.display()))
+                })?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The kind named by the `type` of node `v` (an object), or an error listing the family's types.
+fn kind_of<N: Family>(v: &Value, path: &str) -> Result<&'static Kind<N>> {
+    let ty = Obj::tag(v, path, "type", &declare::type_names::<N>())?;
+    Ok(declare::kind_named::<N>(ty).expect("tag checked against the family's types"))
+}
+
+/// The keys a node of `kind` accepts: `common` and its fields'.
+fn keys<N>(kind: &Kind<N>, common: &[&'static str]) -> Vec<&'static str> {
+    (common.iter().copied())
+        .chain(kind.fields.iter().map(|f| f.key))
+        .collect()
 }
 
 fn camera(v: &Value, path: &str) -> Result<Camera> {
@@ -812,41 +729,4 @@ fn integrator(v: &Value, path: &str) -> Result<IntegratorKind> {
         }
         _ => unreachable!("tag checked against INTEGRATOR_TYPES"),
     })
-}
-
-fn bsdf(v: &Value, path: &str) -> Result<Bsdf> {
-    let ty = Obj::tag(v, path, "type", BSDF_TYPES)?;
-    Ok(match ty {
-        "diffuse" => {
-            let o = Obj::new(v, path.to_string(), &["type", "albedo"])?;
-            let bsdf = Bsdf::Diffuse {
-                albedo: o.vec3("albedo")?.into(),
-            };
-            valid(bsdf.validate(FieldPath::Json(path)))?;
-            bsdf
-        }
-        _ => unreachable!("tag checked against BSDF_TYPES"),
-    })
-}
-
-/// What a grid must satisfy beyond being a float32 3-D array: enough samples for a cubic B-spline and
-/// finite values.
-fn check_grid(data: &GridData) -> std::result::Result<(), String> {
-    let [nx, ny, nz] = data.dims;
-    if data.dims.iter().any(|&n| n < 4) {
-        return Err(format!(
-            "needs at least 4 samples along each axis, got shape [{nz}, {ny}, {nx}] (z, y, x)"
-        ));
-    }
-    if data.values.len() != nx * ny * nz {
-        return Err(format!(
-            "holds {} values, expected {} for shape [{nz}, {ny}, {nx}]",
-            data.values.len(),
-            nx * ny * nz
-        ));
-    }
-    if let Some(i) = data.values.iter().position(|v| !v.is_finite()) {
-        return Err(format!("value {i} is not finite ({})", data.values[i]));
-    }
-    Ok(())
 }

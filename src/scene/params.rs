@@ -4,12 +4,11 @@
 //!
 //! The naming scheme and the order are documented on [`Scene::parameters`].
 
-use super::{NamedEmitter, Scene, Shape};
-use crate::bsdf::Bsdf;
+use super::Scene;
 use crate::camera::Camera;
-use crate::emitter::Emitter;
-use crate::error::{Error, FieldPath, RGB, Result, XYZ};
-use crate::scalar::{Param, Param3};
+use crate::declare;
+use crate::error::{Error, FieldPath, Result, XYZ};
+use crate::scalar::Param;
 use crate::sdf::Sdf;
 
 /// How many near matches an unknown-name error lists.
@@ -23,187 +22,35 @@ pub(super) fn root_prefix(shape: &str, sdf: &Sdf) -> String {
     }
 }
 
-/// Generates a parameter visitor over the sdf tree, the camera, a shape, an emitter and a whole scene,
-/// for shared (`visit_*`) or mutable (`visit_*_mut`) access: the two are the same walk, and writing it
-/// once keeps the names of [`Scene::parameters`] and [`Scene::with_parameter`] identical by construction.
-macro_rules! visitors {
-    ($sdf:ident, $camera:ident, $shape:ident, $emitter:ident, $scene:ident $(, $m:tt)?) => {
-        /// Visits one vector or colour `p` as `<prefix>.<field>.<component>`.
-        fn vec3(
-            prefix: &str,
-            field: &str,
-            comps: [&str; 3],
-            p: &$($m)? Param3,
-            f: &mut dyn FnMut(&str, &$($m)? Param),
-        ) {
-            for (i, c) in comps.iter().enumerate() {
-                f(&format!("{prefix}.{field}.{c}"), &$($m)? p.c[i]);
+/// Calls `f` with every parameter of the camera (`camera.*`), shared or mutable: the same walk written
+/// once.
+macro_rules! camera_visitor {
+    ($visit:ident $(, $m:tt)?) => {
+        fn $visit(camera: &$($m)? Camera, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            for (field, v) in [("origin", &$($m)? camera.origin), ("target", &$($m)? camera.target), ("up", &$($m)? camera.up)] {
+                for (c, p) in XYZ.iter().zip(&$($m)? v.c) {
+                    f(&format!("camera.{field}.{c}"), p);
+                }
             }
-        }
-
-        /// Visits one number as `<prefix>.<field>`.
-        fn scalar(prefix: &str, field: &str, p: &$($m)? Param, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            f(&format!("{prefix}.{field}"), p);
-        }
-
-        /// Visits every parameter of the tree under `sdf`, whose node prefix is `prefix` (ignored if the
-        /// node is named).
-        pub(super) fn $sdf(sdf: &$($m)? Sdf, prefix: &str, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            match sdf {
-                Sdf::Sphere { center, radius } => {
-                    vec3(prefix, "center", XYZ, center, f);
-                    scalar(prefix, "radius", radius, f);
-                }
-                Sdf::Box {
-                    center,
-                    half_size,
-                    rounding,
-                } => {
-                    vec3(prefix, "center", XYZ, center, f);
-                    vec3(prefix, "half_size", XYZ, half_size, f);
-                    scalar(prefix, "rounding", rounding, f);
-                }
-                Sdf::Torus {
-                    center,
-                    major_radius,
-                    minor_radius,
-                    ..
-                } => {
-                    vec3(prefix, "center", XYZ, center, f);
-                    scalar(prefix, "major_radius", major_radius, f);
-                    scalar(prefix, "minor_radius", minor_radius, f);
-                }
-                Sdf::Cylinder {
-                    center,
-                    radius,
-                    half_height,
-                    rounding,
-                    ..
-                } => {
-                    vec3(prefix, "center", XYZ, center, f);
-                    scalar(prefix, "radius", radius, f);
-                    scalar(prefix, "half_height", half_height, f);
-                    scalar(prefix, "rounding", rounding, f);
-                }
-                Sdf::Capsule { a, b, radius } => {
-                    vec3(prefix, "a", XYZ, a, f);
-                    vec3(prefix, "b", XYZ, b, f);
-                    scalar(prefix, "radius", radius, f);
-                }
-                Sdf::Plane { offset, .. } => scalar(prefix, "offset", offset, f),
-                Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
-                    for i in 0..children.len() {
-                        $sdf(&$($m)? children[i], &format!("{prefix}.children.{i}"), f);
-                    }
-                }
-                Sdf::SmoothUnion { children, k } => {
-                    for i in 0..children.len() {
-                        $sdf(&$($m)? children[i], &format!("{prefix}.children.{i}"), f);
-                    }
-                    scalar(prefix, "k", k, f);
-                }
-                Sdf::Transform {
-                    translate,
-                    angle,
-                    scale,
-                    child,
-                    ..
-                } => {
-                    vec3(prefix, "translate", XYZ, translate, f);
-                    scalar(prefix, "angle", angle, f);
-                    scalar(prefix, "scale", scale, f);
-                    $sdf(child, &format!("{prefix}.child"), f);
-                }
-                Sdf::Grid { level, .. } => scalar(prefix, "level", level, f),
-                Sdf::Named { name, child } => $sdf(child, name, f),
-            }
-        }
-
-        /// Visits the camera's parameters (`camera.*`).
-        pub(super) fn $camera(camera: &$($m)? Camera, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            vec3("camera", "origin", XYZ, &$($m)? camera.origin, f);
-            vec3("camera", "target", XYZ, &$($m)? camera.target, f);
-            vec3("camera", "up", XYZ, &$($m)? camera.up, f);
-            scalar("camera", "fov_y", &$($m)? camera.fov_y, f);
-        }
-
-        /// Visits a shape's parameters: translation, sdf tree, BSDF.
-        pub(super) fn $shape(shape: &$($m)? Shape, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            let name = &shape.name;
-            vec3(name, "translate", XYZ, &$($m)? shape.translate, f);
-            let root = root_prefix(name, &shape.sdf);
-            $sdf(&$($m)? shape.sdf, &root, f);
-            match &$($m)? shape.bsdf {
-                Bsdf::Diffuse { albedo } => vec3(name, "albedo", RGB, albedo, f),
-            }
-        }
-
-        /// Visits an emitter's parameters.
-        pub(super) fn $emitter(e: &$($m)? NamedEmitter, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            let name = &e.name;
-            match &$($m)? e.emitter {
-                Emitter::Rectangle {
-                    center,
-                    size,
-                    radiance,
-                    ..
-                } => {
-                    vec3(name, "center", XYZ, center, f);
-                    for (i, c) in ["x", "y"].iter().enumerate() {
-                        f(&format!("{name}.size.{c}"), &$($m)? size[i]);
-                    }
-                    vec3(name, "radiance", RGB, radiance, f);
-                }
-                Emitter::Sphere {
-                    center,
-                    radius,
-                    radiance,
-                } => {
-                    vec3(name, "center", XYZ, center, f);
-                    scalar(name, "radius", radius, f);
-                    vec3(name, "radiance", RGB, radiance, f);
-                }
-                Emitter::Constant { radiance } => vec3(name, "radiance", RGB, radiance, f),
-            }
-        }
-
-        /// Visits every parameter of the scene in the order of [`Scene::parameters`].
-        pub(super) fn $scene(scene: &$($m)? Scene, f: &mut dyn FnMut(&str, &$($m)? Param)) {
-            $camera(&$($m)? scene.camera, f);
-            for s in &$($m)? scene.shapes {
-                $shape(s, f);
-            }
-            for e in &$($m)? scene.emitters {
-                $emitter(e, f);
-            }
+            f("camera.fov_y", &$($m)? camera.fov_y);
         }
     };
 }
-
-/// Shared-access visitors.
-mod shared {
-    use super::*;
-    visitors!(sdf, camera, shape, emitter, scene);
-}
-
-/// Mutable-access visitors.
-mod exclusive {
-    use super::*;
-    visitors!(sdf, camera, shape, emitter, scene, mut);
-}
+camera_visitor!(camera_params);
+camera_visitor!(camera_params_mut, mut);
 
 impl Sdf {
     /// Calls `f` with the full name and value of every parameter in the tree under this node, whose
     /// prefix is `prefix` (a named node uses its own name instead; see [`Scene::parameters`] for
     /// the scheme).
     pub fn visit_params(&self, prefix: &str, f: &mut dyn FnMut(&str, &Param)) {
-        shared::sdf(self, prefix, f);
+        declare::params(self, prefix, f);
     }
 
     /// [`Sdf::visit_params`] with mutable access (to set values or slots). Derived data (a shape's
     /// bounds) is not updated.
     pub fn visit_params_mut(&mut self, prefix: &str, f: &mut dyn FnMut(&str, &mut Param)) {
-        exclusive::sdf(self, prefix, f);
+        declare::params_mut(self, prefix, f);
     }
 }
 
@@ -211,14 +58,38 @@ impl Scene {
     /// Calls `f` with the full name and value of every parameter (see [`Scene::parameters`] for the
     /// names), in the order of [`Scene::parameters`].
     pub fn visit_params(&self, f: &mut dyn FnMut(&str, &Param)) {
-        shared::scene(self, f);
+        camera_params(&self.camera, f);
+        for s in &self.shapes {
+            let name = &s.name;
+            let translate = &s.translate;
+            for (c, p) in XYZ.iter().zip(&translate.c) {
+                f(&format!("{name}.translate.{c}"), p);
+            }
+            s.sdf.visit_params(&root_prefix(name, &s.sdf), f);
+            declare::params(&s.bsdf, name, f);
+        }
+        for e in &self.emitters {
+            declare::params(&e.emitter, &e.name, f);
+        }
     }
 
     /// [`Scene::visit_params`] with mutable access. Changing a value this way does not update derived
     /// data (bounds, Lipschitz bounds, tolerance): use [`Scene::with_parameter`] for that. Changing slots
     /// is what [`Scene::select_parameters`] does.
     pub fn visit_params_mut(&mut self, f: &mut dyn FnMut(&str, &mut Param)) {
-        exclusive::scene(self, f);
+        camera_params_mut(&mut self.camera, f);
+        for s in &mut self.shapes {
+            let name = &s.name;
+            for (c, p) in XYZ.iter().zip(&mut s.translate.c) {
+                f(&format!("{name}.translate.{c}"), p);
+            }
+            let root = root_prefix(name, &s.sdf);
+            s.sdf.visit_params_mut(&root, f);
+            declare::params_mut(&mut s.bsdf, name, f);
+        }
+        for e in &mut self.emitters {
+            declare::params_mut(&mut e.emitter, &e.name, f);
+        }
     }
 
     /// Every parameter with its current value, in a stable order (camera, shapes, emitters).
@@ -390,28 +261,9 @@ impl Scene {
 /// The scene file's rules ([`Sdf::validate`], which the parser applies too) for every node of the tree
 /// under `sdf` (prefix `prefix`), named as parameters.
 fn sdf_violations(sdf: &Sdf, prefix: &str, out: &mut Vec<Error>) {
-    out.extend(sdf.validate(FieldPath::Param(prefix)));
-    match sdf {
-        Sdf::Union(children) | Sdf::Intersection(children) | Sdf::Difference(children) => {
-            for (i, c) in children.iter().enumerate() {
-                sdf_violations(c, &format!("{prefix}.children.{i}"), out);
-            }
-        }
-        Sdf::SmoothUnion { children, .. } => {
-            for (i, c) in children.iter().enumerate() {
-                sdf_violations(c, &format!("{prefix}.children.{i}"), out);
-            }
-        }
-        Sdf::Transform { child, .. } => sdf_violations(child, &format!("{prefix}.child"), out),
-        Sdf::Named { name, child } => sdf_violations(child, name, out),
-        Sdf::Sphere { .. }
-        | Sdf::Box { .. }
-        | Sdf::Torus { .. }
-        | Sdf::Cylinder { .. }
-        | Sdf::Capsule { .. }
-        | Sdf::Plane { .. }
-        | Sdf::Grid { .. } => {}
-    }
+    declare::walk(sdf, prefix, &mut |p, node| {
+        out.extend(node.validate(FieldPath::Param(p)))
+    });
 }
 
 /// Up to [`MAX_SUGGESTIONS`] names close to `name`: by edit distance (at most a third of the name's

@@ -13,7 +13,11 @@
 
 use super::Scene;
 use super::json::SCENE_KEYS;
+use crate::bsdf::Bsdf;
+use crate::declare::{self, Family};
+use crate::emitter::Emitter;
 use crate::error::{Error, Result};
+use crate::sdf::Sdf;
 use serde_json::{Map, Number, Value};
 use std::collections::HashMap;
 
@@ -88,7 +92,6 @@ struct Walk<'a> {
 }
 
 const XYZ: &[&str] = &["x", "y", "z"];
-const RGB: &[&str] = &["r", "g", "b"];
 
 /// The object at `path`, or an error (the document was parsed once, so this means it is not a scene).
 fn object<'v>(v: &'v mut Value, path: &str) -> Result<&'v mut Map<String, Value>> {
@@ -222,14 +225,12 @@ impl Walk<'_> {
             } else {
                 name.clone()
             };
-            self.sdf(sdf, &root, &sdf_path)?;
+            self.node::<Sdf>(sdf, &root, &sdf_path)?;
             let bsdf_path = format!("{path}.bsdf");
-            let bsdf = object(
-                o.get_mut("bsdf")
-                    .ok_or_else(|| Error::field(&bsdf_path, "missing in the scene JSON"))?,
-                &bsdf_path,
-            )?;
-            self.vector(bsdf, "albedo", &name, RGB, None)?;
+            let bsdf = o
+                .get_mut("bsdf")
+                .ok_or_else(|| Error::field(&bsdf_path, "missing in the scene JSON"))?;
+            self.node::<Bsdf>(bsdf, &name, &bsdf_path)?;
         }
 
         for (i, emitter) in array(root.get_mut("emitters"), "emitters")?
@@ -237,122 +238,96 @@ impl Walk<'_> {
             .enumerate()
         {
             let path = format!("emitters[{i}]");
-            let o = object(emitter, &path)?;
-            let name = string(o, "name", &path)?;
-            match string(o, "type", &path)?.as_str() {
-                "rectangle" => {
-                    self.vector(o, "center", &name, XYZ, None)?;
-                    self.vector(o, "size", &name, &["x", "y"], None)?;
-                }
-                "sphere" => {
-                    self.vector(o, "center", &name, XYZ, None)?;
-                    self.scalar(o, "radius", &name, None)?;
-                }
-                _ => {}
-            }
-            self.vector(o, "radiance", &name, RGB, None)?;
+            let name = string(object(emitter, &path)?, "name", &path)?;
+            self.node::<Emitter>(emitter, &name, &path)?;
         }
         Ok(())
     }
 
-    /// The sdf node at `path` whose prefix is `prefix` unless it is named.
-    fn sdf(&mut self, node: &mut Value, prefix: &str, path: &str) -> Result<()> {
+    /// Writes the parameters of the node at `path` (of family `N`, prefix `prefix` unless it has a
+    /// name) where its kind's declaration keeps them, and visits its children.
+    fn node<N: Family>(&mut self, node: &mut Value, prefix: &str, path: &str) -> Result<()> {
         let o = object(node, path)?;
-        let prefix = match o.get("name") {
+        let p = match o.get("name") {
             Some(Value::String(name)) => name.clone(),
             _ => prefix.to_string(),
         };
-        let p = prefix.as_str();
+        let p = p.as_str();
         let ty = string(o, "type", path)?;
-        match ty.as_str() {
-            "sphere" => {
-                self.vector(o, "center", p, XYZ, None)?;
-                self.scalar(o, "radius", p, None)?;
-            }
-            "box" => {
-                self.vector(o, "center", p, XYZ, None)?;
-                self.vector(o, "half_size", p, XYZ, None)?;
-                self.scalar(o, "rounding", p, Some(0.0))?;
-            }
-            "torus" => {
-                self.vector(o, "center", p, XYZ, None)?;
-                self.scalar(o, "major_radius", p, None)?;
-                self.scalar(o, "minor_radius", p, None)?;
-            }
-            "cylinder" => {
-                self.vector(o, "center", p, XYZ, None)?;
-                self.scalar(o, "radius", p, None)?;
-                self.scalar(o, "half_height", p, None)?;
-                self.scalar(o, "rounding", p, Some(0.0))?;
-            }
-            "capsule" => {
-                self.vector(o, "a", p, XYZ, None)?;
-                self.vector(o, "b", p, XYZ, None)?;
-                self.scalar(o, "radius", p, None)?;
-            }
-            "plane" => self.scalar(o, "offset", p, None)?,
-            "union" | "intersection" | "difference" | "smooth_union" => {
-                let children_path = format!("{path}.children");
-                for (i, child) in array(o.get_mut("children"), &children_path)?
-                    .iter_mut()
-                    .enumerate()
-                {
-                    self.sdf(
-                        child,
-                        &format!("{p}.children.{i}"),
-                        &format!("{children_path}[{i}]"),
-                    )?;
+        let Some(kind) = declare::kind_named::<N>(&ty) else {
+            return Err(Error::field(
+                format!("{path}.type"),
+                format!("unknown type {ty:?} in the scene JSON"),
+            ));
+        };
+        for field in kind.fields {
+            let key = field.key;
+            match &field.value {
+                declare::Value::Number { default, .. } => self.scalar(o, key, p, *default)?,
+                declare::Value::Vector {
+                    components,
+                    default,
+                    ..
+                } => self.vector(o, key, p, components.names(), *default)?,
+                declare::Value::Pair { .. } => self.vector(o, key, p, &["x", "y"], None)?,
+                declare::Value::Rotation { .. } => self.rotation_angle(o, key, p, path)?,
+                declare::Value::Child(_) => {
+                    let child_path = format!("{path}.{key}");
+                    let child = o
+                        .get_mut(key)
+                        .ok_or_else(|| Error::field(&child_path, "missing in the scene JSON"))?;
+                    self.node::<N>(child, &format!("{p}.{key}"), &child_path)?;
                 }
-                if ty == "smooth_union" {
-                    self.scalar(o, "k", p, None)?;
+                declare::Value::Children(_) => {
+                    let children_path = format!("{path}.{key}");
+                    for (i, child) in array(o.get_mut(key), &children_path)?
+                        .iter_mut()
+                        .enumerate()
+                    {
+                        self.node::<N>(
+                            child,
+                            &format!("{p}.{key}.{i}"),
+                            &format!("{children_path}[{i}]"),
+                        )?;
+                    }
                 }
-            }
-            "transform" => {
-                self.vector(o, "translate", p, XYZ, Some(0.0))?;
-                self.transform_angle(o, p, path)?;
-                self.scalar(o, "scale", p, Some(1.0))?;
-                let child_path = format!("{path}.child");
-                let child = o
-                    .get_mut("child")
-                    .ok_or_else(|| Error::field(&child_path, "missing in the scene JSON"))?;
-                self.sdf(child, &format!("{p}.child"), &child_path)?;
-            }
-            "grid" => {
-                self.scalar(o, "level", p, Some(0.0))?;
-                let file = string(o, "file", path)?;
-                self.files.push((p.to_string(), file));
-                if let Some(k) = self.new_files.iter().position(|(n, _)| n == p) {
-                    o.insert("file".into(), Value::String(self.new_files[k].1.clone()));
-                    self.replaced[k] = true;
+                declare::Value::File { .. } => {
+                    let file = string(o, key, path)?;
+                    self.files.push((p.to_string(), file));
+                    if let Some(k) = self.new_files.iter().position(|(n, _)| n == p) {
+                        o.insert(key.into(), Value::String(self.new_files[k].1.clone()));
+                        self.replaced[k] = true;
+                    }
                 }
-            }
-            other => {
-                return Err(Error::field(
-                    format!("{path}.type"),
-                    format!("unknown type {other:?} in the scene JSON"),
-                ));
+                declare::Value::Direction { .. } | declare::Value::Fixed { .. } => {}
             }
         }
         Ok(())
     }
 
-    /// A transform's `angle` parameter, kept in `rotate.angle`; without `rotate`, a non-zero angle adds
-    /// `rotate` about the parser's default axis `+y`.
-    fn transform_angle(&mut self, o: &mut Map<String, Value>, p: &str, path: &str) -> Result<()> {
+    /// A rotation's `angle` parameter, kept in `<key>.angle`; without the rotation, a non-zero angle
+    /// adds one about the parser's default axis `+y`.
+    fn rotation_angle(
+        &mut self,
+        o: &mut Map<String, Value>,
+        key: &str,
+        p: &str,
+        path: &str,
+    ) -> Result<()> {
         let name = format!("{p}.angle");
         let Some(v) = self.take(&name)? else {
             return Ok(());
         };
-        match o.get_mut("rotate") {
+        match o.get_mut(key) {
             Some(rotate) => {
-                object(rotate, &format!("{path}.rotate"))?
+                object(rotate, &format!("{path}.{key}"))?
                     .insert("angle".into(), json_number(v, &name)?);
             }
             None if v != 0.0 => {
                 let mut rotate = Map::new();
                 rotate.insert("axis".into(), serde_json::json!([0, 1, 0]));
                 rotate.insert("angle".into(), json_number(v, &name)?);
-                o.insert("rotate".into(), Value::Object(rotate));
+                o.insert(key.into(), Value::Object(rotate));
             }
             None => {}
         }

@@ -200,3 +200,79 @@ pub(super) fn smooth_union_bounds(children: &[Sdf], k: f32) -> Aabb {
 pub(super) fn max_lipschitz(children: &[Sdf]) -> f32 {
     children.iter().map(Sdf::lipschitz).fold(1.0, f32::max)
 }
+
+/// The declarations of the CSG nodes' fields ([`crate::declare`]).
+pub(super) mod kinds {
+    use crate::declare::{Field, Kind, Rule, Value, on};
+    use crate::sdf::Sdf;
+
+    /// A list of children of at least one node.
+    const fn children(access: crate::declare::Access<Sdf, Vec<Sdf>>) -> Field<Sdf> {
+        Field {
+            key: "children",
+            value: Value::Children(access),
+        }
+    }
+
+    /// The children of the examples: two overlapping spheres.
+    macro_rules! two_spheres {
+        () => {
+            r#"[{"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5},
+                {"type": "sphere", "center": [0.4, 0.5, 0.1], "radius": 0.4}]"#
+        };
+    }
+
+    /// `{"type": "union", "children": [...]}`: the minimum of the children.
+    pub(in crate::sdf) const UNION: Kind<Sdf> = Kind {
+        type_name: "union",
+        fields: &[children(on!(Sdf::Union(c) => c))],
+        blank: || Sdf::Union(Vec::new()),
+        example: concat!(r#"{"type": "union", "children": "#, two_spheres!(), "}"),
+    };
+
+    /// `{"type": "intersection", "children": [...]}`: the maximum of the children.
+    pub(in crate::sdf) const INTERSECTION: Kind<Sdf> = Kind {
+        type_name: "intersection",
+        fields: &[children(on!(Sdf::Intersection(c) => c))],
+        blank: || Sdf::Intersection(Vec::new()),
+        example: concat!(
+            r#"{"type": "intersection", "children": "#,
+            two_spheres!(),
+            "}"
+        ),
+    };
+
+    /// `{"type": "difference", "children": [...]}`: the first child minus the others.
+    pub(in crate::sdf) const DIFFERENCE: Kind<Sdf> = Kind {
+        type_name: "difference",
+        fields: &[children(on!(Sdf::Difference(c) => c))],
+        blank: || Sdf::Difference(Vec::new()),
+        example: concat!(
+            r#"{"type": "difference", "children": "#,
+            two_spheres!(),
+            "}"
+        ),
+    };
+
+    /// `{"type": "smooth_union", "children": [...], "k": blend radius}`.
+    pub(in crate::sdf) const SMOOTH_UNION: Kind<Sdf> = Kind {
+        type_name: "smooth_union",
+        fields: &[
+            children(on!(Sdf::SmoothUnion { children, .. } => children)),
+            Field {
+                key: "k",
+                value: Value::Number {
+                    access: on!(Sdf::SmoothUnion { k, .. } => k),
+                    default: None,
+                    rule: Rule::Positive,
+                },
+            },
+        ],
+        blank: || Sdf::smooth_union(Vec::new(), 0.0),
+        example: concat!(
+            r#"{"type": "smooth_union", "k": 0.2, "children": "#,
+            two_spheres!(),
+            "}"
+        ),
+    };
+}

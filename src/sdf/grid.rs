@@ -480,3 +480,110 @@ pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level:
     let at = |i: [usize; 3]| bmin + h * glam::Vec3::from(i.map(|v| v as f32));
     Aabb::new(at(lo).max(bmin), at(hi).min(bmax)).expanded(pad)
 }
+
+/// The declaration of the grid node's fields ([`crate::declare`]).
+pub(super) mod kinds {
+    use crate::declare::{Field, Kind, Rule, Value, on};
+    use crate::error::Error;
+    use crate::scalar::{GridValues, Param};
+    use crate::sdf::{GridData, Sdf, read_npy};
+    use std::sync::Arc;
+
+    /// `{"type": "grid", "file": ".npy of shape [nz, ny, nx]", "bbox_min", "bbox_max", "level"
+    /// (default 0)}`.
+    pub(in crate::sdf) const GRID: Kind<Sdf> = Kind {
+        type_name: "grid",
+        fields: &[
+            Field {
+                key: "file",
+                value: Value::File { load: load_grid },
+            },
+            Field {
+                key: "bbox_min",
+                value: Value::Fixed {
+                    access: on!(Sdf::Grid { bbox_min, .. } => bbox_min),
+                    after: None,
+                },
+            },
+            Field {
+                key: "bbox_max",
+                value: Value::Fixed {
+                    access: on!(Sdf::Grid { bbox_max, .. } => bbox_max),
+                    after: Some(|n| {
+                        let Sdf::Grid {
+                            bbox_min, bbox_max, ..
+                        } = n
+                        else {
+                            unreachable!("a grid's rule")
+                        };
+                        if bbox_max.cmpgt(*bbox_min).all() {
+                            return Ok(());
+                        }
+                        let fmt = |v: glam::Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+                        Err(format!(
+                            "must exceed bbox_min {} in every component, got {}",
+                            fmt(*bbox_min),
+                            fmt(*bbox_max)
+                        ))
+                    }),
+                },
+            },
+            Field {
+                key: "level",
+                value: Value::Number {
+                    access: on!(Sdf::Grid { level, .. } => level),
+                    default: Some(0.0),
+                    rule: Rule::Any,
+                },
+            },
+        ],
+        blank: || Sdf::Grid {
+            data: Arc::new(GridData {
+                dims: [0; 3],
+                values: Vec::new(),
+            }),
+            bbox_min: glam::Vec3::ZERO,
+            bbox_max: glam::Vec3::ZERO,
+            level: Param::new(0.0),
+            selection: GridValues::Constant,
+        },
+        example: r#"{"type": "grid", "file": "example_grid.npy", "bbox_min": [-1, -0.5, -1], "bbox_max": [1, 1.5, 1], "level": 0.05}"#,
+    };
+
+    /// Reads a grid's `.npy` into the node and checks it (at least 4 samples per axis, finite values).
+    fn load_grid(node: &mut Sdf, file: &std::path::Path) -> Result<(), String> {
+        let data = read_npy(file).map_err(|e| match e {
+            // The reader's own message names the file already when it is a file error.
+            Error::File { message, .. } => message,
+            e => e.to_string(),
+        })?;
+        check_grid(&data)?;
+        let Sdf::Grid { data: slot, .. } = node else {
+            unreachable!("a grid's file")
+        };
+        *slot = Arc::new(data);
+        Ok(())
+    }
+
+    /// What a grid must satisfy beyond being a float32 3-D array: enough samples for a cubic B-spline
+    /// and finite values.
+    fn check_grid(data: &GridData) -> Result<(), String> {
+        let [nx, ny, nz] = data.dims;
+        if data.dims.iter().any(|&n| n < 4) {
+            return Err(format!(
+                "needs at least 4 samples along each axis, got shape [{nz}, {ny}, {nx}] (z, y, x)"
+            ));
+        }
+        if data.values.len() != nx * ny * nz {
+            return Err(format!(
+                "holds {} values, expected {} for shape [{nz}, {ny}, {nx}]",
+                data.values.len(),
+                nx * ny * nz
+            ));
+        }
+        if let Some(i) = data.values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("value {i} is not finite ({})", data.values[i]));
+        }
+        Ok(())
+    }
+}

@@ -51,6 +51,7 @@ pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
 pub use transform::AngleTrig;
 
+use crate::declare::{Family, Kind};
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
 use crate::scalar::{Dual2Vec3, DualVec3, GridValues, Param, Param3, Scalar};
@@ -199,6 +200,60 @@ pub enum Sdf {
         /// The named node.
         child: Box<Sdf>,
     },
+}
+
+/// Every sdf node kind ([`crate::declare`]), in the order the scene file's errors list them.
+const KINDS: &[&Kind<Sdf>] = &[
+    &primitives::kinds::SPHERE,
+    &primitives::kinds::BOX,
+    &primitives::kinds::TORUS,
+    &primitives::kinds::CYLINDER,
+    &primitives::kinds::CAPSULE,
+    &primitives::kinds::PLANE,
+    &csg::kinds::UNION,
+    &csg::kinds::INTERSECTION,
+    &csg::kinds::DIFFERENCE,
+    &csg::kinds::SMOOTH_UNION,
+    &transform::kinds::TRANSFORM,
+    &grid::kinds::GRID,
+];
+
+impl Family for Sdf {
+    fn kinds() -> &'static [&'static Kind<Sdf>] {
+        KINDS
+    }
+
+    fn kind(&self) -> &'static Kind<Sdf> {
+        match self {
+            Sdf::Sphere { .. } => &primitives::kinds::SPHERE,
+            Sdf::Box { .. } => &primitives::kinds::BOX,
+            Sdf::Torus { .. } => &primitives::kinds::TORUS,
+            Sdf::Cylinder { .. } => &primitives::kinds::CYLINDER,
+            Sdf::Capsule { .. } => &primitives::kinds::CAPSULE,
+            Sdf::Plane { .. } => &primitives::kinds::PLANE,
+            Sdf::Union(_) => &csg::kinds::UNION,
+            Sdf::Intersection(_) => &csg::kinds::INTERSECTION,
+            Sdf::Difference(_) => &csg::kinds::DIFFERENCE,
+            Sdf::SmoothUnion { .. } => &csg::kinds::SMOOTH_UNION,
+            Sdf::Transform { .. } => &transform::kinds::TRANSFORM,
+            Sdf::Grid { .. } => &grid::kinds::GRID,
+            Sdf::Named { child, .. } => child.kind(),
+        }
+    }
+
+    fn named(&self) -> Option<(&str, &Self)> {
+        match self {
+            Sdf::Named { name, child } => Some((name, child)),
+            _ => None,
+        }
+    }
+
+    fn named_mut(&mut self) -> Option<(&str, &mut Self)> {
+        match self {
+            Sdf::Named { name, child } => Some((name, child)),
+            _ => None,
+        }
+    }
 }
 
 impl Sdf {

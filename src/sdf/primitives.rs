@@ -137,3 +137,224 @@ pub(super) fn capsule_bounds(a: &Param3, b: &Param3, radius: &Param) -> Aabb {
     let (a, b) = (a.value(), b.value());
     Aabb::new(a.min(b), a.max(b)).expanded(radius.value.abs())
 }
+
+/// The declarations of the primitives' fields ([`crate::declare`]).
+pub(super) mod kinds {
+    use crate::declare::{Components::Xyz, Field, Kind, Rule, Value, on};
+    use crate::scalar::{Param, Param3};
+    use crate::sdf::Sdf;
+
+    const fn point(key: &'static str, access: crate::declare::Access<Sdf, Param3>) -> Field<Sdf> {
+        Field {
+            key,
+            value: Value::Vector {
+                access,
+                components: Xyz,
+                default: None,
+                rule: Rule::Any,
+            },
+        }
+    }
+
+    const fn number(
+        key: &'static str,
+        access: crate::declare::Access<Sdf, Param>,
+        default: Option<f32>,
+        rule: Rule<Sdf>,
+    ) -> Field<Sdf> {
+        Field {
+            key,
+            value: Value::Number {
+                access,
+                default,
+                rule,
+            },
+        }
+    }
+
+    fn zero3() -> Param3 {
+        Param3::from(glam::Vec3::ZERO)
+    }
+
+    /// `{"type": "sphere", "center": [x, y, z], "radius": r}`.
+    pub(in crate::sdf) const SPHERE: Kind<Sdf> = Kind {
+        type_name: "sphere",
+        fields: &[
+            point("center", on!(Sdf::Sphere { center, .. } => center)),
+            number(
+                "radius",
+                on!(Sdf::Sphere { radius, .. } => radius),
+                None,
+                Rule::Positive,
+            ),
+        ],
+        blank: || Sdf::sphere(zero3(), 0.0),
+        example: r#"{"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5}"#,
+    };
+
+    /// `{"type": "box", "center", "half_size", "rounding" (default 0, at most the smallest half size)}`.
+    pub(in crate::sdf) const BOX: Kind<Sdf> = Kind {
+        type_name: "box",
+        fields: &[
+            point("center", on!(Sdf::Box { center, .. } => center)),
+            Field {
+                key: "half_size",
+                value: Value::Vector {
+                    access: on!(Sdf::Box { half_size, .. } => half_size),
+                    components: Xyz,
+                    default: None,
+                    rule: Rule::Positive,
+                },
+            },
+            number(
+                "rounding",
+                on!(Sdf::Box { rounding, .. } => rounding),
+                Some(0.0),
+                Rule::Relation {
+                    ok: |n, v| (0.0..=box_rounding_limit(n)).contains(&v),
+                    text: |n| format!("must be in [0, {}]", box_rounding_limit(n)),
+                },
+            ),
+        ],
+        blank: || Sdf::cuboid(zero3(), zero3(), 0.0),
+        example: r#"{"type": "box", "center": [0, 0.4, 0], "half_size": [0.4, 0.3, 0.5], "rounding": 0.05}"#,
+    };
+
+    /// The largest rounding of a box: its smallest half size (0 if one is negative, which is reported
+    /// on its own).
+    fn box_rounding_limit(n: &Sdf) -> f32 {
+        match n {
+            Sdf::Box { half_size, .. } => half_size.value().min_element().max(0.0),
+            _ => unreachable!("a box's rule"),
+        }
+    }
+
+    /// `{"type": "torus", "center", "axis", "major_radius" (> minor_radius), "minor_radius" (> 0)}`.
+    pub(in crate::sdf) const TORUS: Kind<Sdf> = Kind {
+        type_name: "torus",
+        fields: &[
+            point("center", on!(Sdf::Torus { center, .. } => center)),
+            Field {
+                key: "axis",
+                value: Value::Direction {
+                    access: on!(Sdf::Torus { axis, .. } => axis),
+                    after: None,
+                },
+            },
+            number(
+                "major_radius",
+                on!(Sdf::Torus { major_radius, .. } => major_radius),
+                None,
+                Rule::Relation {
+                    ok: |n, v| v > torus_minor(n),
+                    text: |n| format!("must be > minor_radius ({})", torus_minor(n)),
+                },
+            ),
+            number(
+                "minor_radius",
+                on!(Sdf::Torus { minor_radius, .. } => minor_radius),
+                None,
+                Rule::Positive,
+            ),
+        ],
+        blank: || Sdf::torus(zero3(), glam::Vec3::Y, 0.0, 0.0),
+        example: r#"{"type": "torus", "center": [0, 0.3, 0], "axis": [0, 1, 0], "major_radius": 0.6, "minor_radius": 0.2}"#,
+    };
+
+    fn torus_minor(n: &Sdf) -> f32 {
+        match n {
+            Sdf::Torus { minor_radius, .. } => minor_radius.value,
+            _ => unreachable!("a torus's rule"),
+        }
+    }
+
+    /// `{"type": "cylinder", "center", "axis", "radius", "half_height", "rounding" (default 0, at most
+    /// the radius and the half height)}`.
+    pub(in crate::sdf) const CYLINDER: Kind<Sdf> = Kind {
+        type_name: "cylinder",
+        fields: &[
+            point("center", on!(Sdf::Cylinder { center, .. } => center)),
+            Field {
+                key: "axis",
+                value: Value::Direction {
+                    access: on!(Sdf::Cylinder { axis, .. } => axis),
+                    after: None,
+                },
+            },
+            number(
+                "radius",
+                on!(Sdf::Cylinder { radius, .. } => radius),
+                None,
+                Rule::Positive,
+            ),
+            number(
+                "half_height",
+                on!(Sdf::Cylinder { half_height, .. } => half_height),
+                None,
+                Rule::Positive,
+            ),
+            number(
+                "rounding",
+                on!(Sdf::Cylinder { rounding, .. } => rounding),
+                Some(0.0),
+                Rule::Relation {
+                    ok: |n, v| (0.0..=cylinder_rounding_limit(n)).contains(&v),
+                    text: |n| format!("must be in [0, {}]", cylinder_rounding_limit(n)),
+                },
+            ),
+        ],
+        blank: || Sdf::cylinder(zero3(), glam::Vec3::Y, 0.0, 0.0, 0.0),
+        example: r#"{"type": "cylinder", "center": [0, 0.5, 0], "axis": [0, 1, 0], "radius": 0.4, "half_height": 0.5, "rounding": 0.1}"#,
+    };
+
+    /// The largest rounding of a cylinder: the smaller of its radius and half height (0 if negative).
+    fn cylinder_rounding_limit(n: &Sdf) -> f32 {
+        match n {
+            Sdf::Cylinder {
+                radius,
+                half_height,
+                ..
+            } => radius.value.min(half_height.value).max(0.0),
+            _ => unreachable!("a cylinder's rule"),
+        }
+    }
+
+    /// `{"type": "capsule", "a", "b", "radius"}`.
+    pub(in crate::sdf) const CAPSULE: Kind<Sdf> = Kind {
+        type_name: "capsule",
+        fields: &[
+            point("a", on!(Sdf::Capsule { a, .. } => a)),
+            point("b", on!(Sdf::Capsule { b, .. } => b)),
+            number(
+                "radius",
+                on!(Sdf::Capsule { radius, .. } => radius),
+                None,
+                Rule::Positive,
+            ),
+        ],
+        blank: || Sdf::capsule(zero3(), zero3(), 0.0),
+        example: r#"{"type": "capsule", "a": [-0.5, 0.3, 0], "b": [0.5, 0.3, 0], "radius": 0.3}"#,
+    };
+
+    /// `{"type": "plane", "normal", "offset"}`: the half-space `normal · p <= offset`.
+    pub(in crate::sdf) const PLANE: Kind<Sdf> = Kind {
+        type_name: "plane",
+        fields: &[
+            Field {
+                key: "normal",
+                value: Value::Direction {
+                    access: on!(Sdf::Plane { normal, .. } => normal),
+                    after: None,
+                },
+            },
+            number(
+                "offset",
+                on!(Sdf::Plane { offset, .. } => offset),
+                None,
+                Rule::Any,
+            ),
+        ],
+        blank: || Sdf::plane(glam::Vec3::Y, 0.0),
+        example: r#"{"type": "plane", "normal": [0, 1, 0], "offset": 0}"#,
+    };
+}

@@ -127,3 +127,51 @@ pub(super) fn bounds(
     // Rounding of the rotation: grow by a few ulps of the box size so sampled boundary points stay inside.
     out.expanded(1e-6 * (out.extent().max_element() + t.abs().max_element()))
 }
+
+/// The declaration of the transform node's fields ([`crate::declare`]).
+pub(super) mod kinds {
+    use crate::declare::{Components::Xyz, Field, Kind, Rule, Value, on};
+    use crate::sdf::Sdf;
+
+    /// `{"type": "transform", "translate" (default 0), "rotate": {"axis", "angle"} (default none),
+    /// "scale" (default 1), "child"}`.
+    pub(in crate::sdf) const TRANSFORM: Kind<Sdf> = Kind {
+        type_name: "transform",
+        fields: &[
+            Field {
+                key: "translate",
+                value: Value::Vector {
+                    access: on!(Sdf::Transform { translate, .. } => translate),
+                    components: Xyz,
+                    default: Some(0.0),
+                    rule: Rule::Any,
+                },
+            },
+            Field {
+                key: "rotate",
+                value: Value::Rotation {
+                    axis: on!(Sdf::Transform { axis, .. } => axis),
+                    angle: on!(Sdf::Transform { angle, .. } => angle),
+                },
+            },
+            Field {
+                key: "scale",
+                value: Value::Number {
+                    access: on!(Sdf::Transform { scale, .. } => scale),
+                    default: Some(1.0),
+                    rule: Rule::Positive,
+                },
+            },
+            Field {
+                key: "child",
+                value: Value::Child(on!(Sdf::Transform { child, .. } => child)),
+            },
+        ],
+        blank: || {
+            let placeholder = Sdf::Union(Vec::new());
+            Sdf::transform(placeholder, glam::Vec3::ZERO, glam::Vec3::Y, 0.0, 1.0)
+        },
+        example: r#"{"type": "transform", "translate": [0.1, 0.2, 0], "rotate": {"axis": [0, 0, 1], "angle": 30},
+                     "scale": 1.5, "child": {"type": "sphere", "center": [0, 0.3, 0], "radius": 0.4}}"#,
+    };
+}

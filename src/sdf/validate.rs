@@ -1,87 +1,20 @@
-//! The scene rules on a node's own fields (a radius `> 0`, a rounding within the half sizes, ...), used
-//! by the scene parser and by parameter updates alike, so the two cannot drift apart.
+//! The scene rules on a node's own fields (a radius `> 0`, a rounding within the half sizes, ...), as
+//! declared with each node kind, used by the scene parser and by parameter updates alike, so the two
+//! cannot drift apart.
 
 use super::Sdf;
-use crate::error::{Error, FieldPath, XYZ};
+use crate::error::{Error, FieldPath};
 
 impl Sdf {
     /// The broken rules of this node's own fields, named by `at` (the node's path or parameter prefix),
-    /// in a fixed order; empty when the node is valid. Children are not visited: the parser checks
-    /// each node as it reads it and the parameter registry walks the tree with its own naming.
+    /// in a fixed order (rules on one field in field order, then rules relating fields); empty when the
+    /// node is valid. Children are not visited: the parser checks each node as it reads it and the
+    /// parameter registry walks the tree with its own naming. The rules are the node kind's declaration
+    /// ([`crate::declare::Kind`]).
     ///
     /// Unit directions and grids are checked where they are read (they are not parameters).
     pub fn validate(&self, at: FieldPath) -> Vec<Error> {
-        let mut out = Vec::new();
-        let positive = |out: &mut Vec<Error>, key: &str, v: f32| {
-            at.check(out, v > 0.0, at.field(key), "must be > 0", v);
-        };
-        let in_range = |out: &mut Vec<Error>, key: &str, v: f32, hi: f32| {
-            let rule = format!("must be in [0, {hi}]");
-            at.check(out, (0.0..=hi).contains(&v), at.field(key), &rule, v);
-        };
-        match self {
-            Sdf::Sphere { radius, .. } | Sdf::Capsule { radius, .. } => {
-                positive(&mut out, "radius", radius.value)
-            }
-            Sdf::Box {
-                half_size,
-                rounding,
-                ..
-            } => {
-                let half = half_size.value();
-                at.check_each(
-                    &mut out,
-                    "half_size",
-                    &XYZ,
-                    half,
-                    |x| x > 0.0,
-                    "must be > 0",
-                );
-                // Clamped so that a negative half size (already reported) gives a readable range.
-                in_range(
-                    &mut out,
-                    "rounding",
-                    rounding.value,
-                    half.min_element().max(0.0),
-                );
-            }
-            Sdf::Torus {
-                major_radius,
-                minor_radius,
-                ..
-            } => {
-                let (major, minor) = (major_radius.value, minor_radius.value);
-                positive(&mut out, "minor_radius", minor);
-                let rule = format!("must be > minor_radius ({minor})");
-                at.check(
-                    &mut out,
-                    major > minor,
-                    at.field("major_radius"),
-                    &rule,
-                    major,
-                );
-            }
-            Sdf::Cylinder {
-                radius,
-                half_height,
-                rounding,
-                ..
-            } => {
-                positive(&mut out, "radius", radius.value);
-                positive(&mut out, "half_height", half_height.value);
-                let hi = radius.value.min(half_height.value).max(0.0);
-                in_range(&mut out, "rounding", rounding.value, hi);
-            }
-            Sdf::SmoothUnion { k, .. } => positive(&mut out, "k", k.value),
-            Sdf::Transform { scale, .. } => positive(&mut out, "scale", scale.value),
-            Sdf::Plane { .. }
-            | Sdf::Grid { .. }
-            | Sdf::Union(_)
-            | Sdf::Intersection(_)
-            | Sdf::Difference(_)
-            | Sdf::Named { .. } => {}
-        }
-        out
+        crate::declare::violations(self, at)
     }
 }
 
