@@ -61,21 +61,7 @@ impl Sdf {
                         + (w - ring) * scale_of::<S>(minor_radius),
                 )
             }
-            Sdf::Capsule { a, b, radius } => {
-                // The nearest point of the segment moves with its ends at the same segment parameter.
-                let (a0, b0) = (a.value(), b.value());
-                let ba = b0 - a0;
-                let bb = ba.length_squared();
-                let t = if bb > 0.0 {
-                    ((q - Vec3::constant(a0)).dot_f32(ba) / bb).clamp(0.0, 1.0)
-                } else {
-                    S::zero()
-                };
-                let (a_s, b_s) = (a.get::<S>(), b.get::<S>());
-                let axis_point = a_s + (b_s - a_s) * t;
-                let rest = Vec3::constant(a0) + Vec3::constant(ba) * t;
-                Some(axis_point + (q - rest) * scale_of::<S>(radius))
-            }
+            Sdf::Primitive(primitive) => primitive.carried(q),
             Sdf::Box {
                 center,
                 half_size,
@@ -134,7 +120,8 @@ impl Sdf {
     pub fn curvature_bound(&self) -> f32 {
         let inv = |r: f32| if r > 0.0 { 1.0 / r } else { f32::INFINITY };
         match self {
-            Sdf::Sphere { radius, .. } | Sdf::Capsule { radius, .. } => 2.0 * inv(radius.value),
+            Sdf::Sphere { radius, .. } => 2.0 * inv(radius.value),
+            Sdf::Primitive(primitive) => primitive.curvature_bound(),
             Sdf::Torus {
                 major_radius,
                 minor_radius,

@@ -38,6 +38,7 @@ mod grid_edit;
 pub mod interval;
 mod line_crossings;
 mod npy;
+mod primitive;
 mod primitives;
 mod transform;
 mod validate;
@@ -49,7 +50,13 @@ pub use crossing_creases::CrossingCrease;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
+pub use primitive::SdfPrimitive;
 pub use transform::AngleTrig;
+
+// The primitives kept in files of their own: one line each ([`primitive`]).
+primitive::primitives! {
+    capsule => Capsule,
+}
 
 use crate::declare::{Family, Kind};
 use crate::error::Result;
@@ -130,15 +137,8 @@ pub enum Sdf {
         /// Rim radius, in `[0, min(radius, half_height)]`.
         rounding: Param,
     },
-    /// Capsule: points within `radius` of the segment `a`–`b`.
-    Capsule {
-        /// First end of the segment.
-        a: Param3,
-        /// Second end of the segment.
-        b: Param3,
-        /// Radius (> 0).
-        radius: Param,
-    },
+    /// A primitive kept in a file of its own ([`Primitive`]).
+    Primitive(Primitive),
     /// Half-space `normal · p − offset ≤ 0`.
     Plane {
         /// Unit normal (pointing out of the solid).
@@ -202,25 +202,33 @@ pub enum Sdf {
     },
 }
 
-/// Every sdf node kind ([`crate::declare`]), in the order the scene file's errors list them.
-const KINDS: &[&Kind<Sdf>] = &[
-    &primitives::kinds::SPHERE,
-    &primitives::kinds::BOX,
-    &primitives::kinds::TORUS,
-    &primitives::kinds::CYLINDER,
-    &primitives::kinds::CAPSULE,
-    &primitives::kinds::PLANE,
-    &csg::kinds::UNION,
-    &csg::kinds::INTERSECTION,
-    &csg::kinds::DIFFERENCE,
-    &csg::kinds::SMOOTH_UNION,
-    &transform::kinds::TRANSFORM,
-    &grid::kinds::GRID,
-];
+/// Every sdf node kind ([`crate::declare`]), in the order the scene file's errors list them: the
+/// primitives (those in files of their own after the others), the plane, CSG, transforms and grids.
+static KINDS: std::sync::LazyLock<Vec<&'static Kind<Sdf>>> = std::sync::LazyLock::new(|| {
+    let before: [&'static Kind<Sdf>; 4] = [
+        &primitives::kinds::SPHERE,
+        &primitives::kinds::BOX,
+        &primitives::kinds::TORUS,
+        &primitives::kinds::CYLINDER,
+    ];
+    let after: [&'static Kind<Sdf>; 7] = [
+        &primitives::kinds::PLANE,
+        &csg::kinds::UNION,
+        &csg::kinds::INTERSECTION,
+        &csg::kinds::DIFFERENCE,
+        &csg::kinds::SMOOTH_UNION,
+        &transform::kinds::TRANSFORM,
+        &grid::kinds::GRID,
+    ];
+    (before.into_iter())
+        .chain(PRIMITIVE_KINDS.iter().copied())
+        .chain(after)
+        .collect()
+});
 
 impl Family for Sdf {
     fn kinds() -> &'static [&'static Kind<Sdf>] {
-        KINDS
+        &KINDS
     }
 
     fn kind(&self) -> &'static Kind<Sdf> {
@@ -229,7 +237,7 @@ impl Family for Sdf {
             Sdf::Box { .. } => &primitives::kinds::BOX,
             Sdf::Torus { .. } => &primitives::kinds::TORUS,
             Sdf::Cylinder { .. } => &primitives::kinds::CYLINDER,
-            Sdf::Capsule { .. } => &primitives::kinds::CAPSULE,
+            Sdf::Primitive(primitive) => primitive.kind(),
             Sdf::Plane { .. } => &primitives::kinds::PLANE,
             Sdf::Union(_) => &csg::kinds::UNION,
             Sdf::Intersection(_) => &csg::kinds::INTERSECTION,
@@ -281,7 +289,7 @@ impl Sdf {
                 half_height,
                 rounding,
             } => primitives::cylinder(p, center, *axis, radius, half_height, rounding),
-            Sdf::Capsule { a, b, radius } => primitives::capsule(p, a, b, radius),
+            Sdf::Primitive(primitive) => primitive.eval(p),
             Sdf::Plane { normal, offset } => primitives::plane(p, *normal, offset),
             Sdf::Union(children) => csg::union(children, p),
             Sdf::Intersection(children) => csg::intersection(children, p),
@@ -405,7 +413,7 @@ impl Sdf {
                 half_height,
                 ..
             } => primitives::cylinder_bounds(center, *axis, radius, half_height),
-            Sdf::Capsule { a, b, radius } => primitives::capsule_bounds(a, b, radius),
+            Sdf::Primitive(primitive) => primitive.bounds(),
             Sdf::Plane { .. } => Aabb::INFINITE,
             Sdf::Union(children) => csg::union_bounds(children),
             Sdf::Intersection(children) => csg::intersection_bounds(children),
@@ -624,14 +632,6 @@ impl Sdf {
             rounding: rounding.into(),
         }
     }
-    /// A capsule around the segment `a`–`b`.
-    pub fn capsule(a: impl Into<Param3>, b: impl Into<Param3>, radius: impl Into<Param>) -> Self {
-        Sdf::Capsule {
-            a: a.into(),
-            b: b.into(),
-            radius: radius.into(),
-        }
-    }
     /// The half-space `normal·p ≤ offset` (`normal` normalised; `+z` if zero).
     pub fn plane(normal: glam::Vec3, offset: impl Into<Param>) -> Self {
         Sdf::Plane {
@@ -686,11 +686,8 @@ impl Sdf {
     /// plane at the ray's origin), so ray queries need not trace it ([`crate::scene::Scene::leaving`]).
     pub fn is_convex(&self) -> bool {
         match self {
-            Sdf::Sphere { .. }
-            | Sdf::Box { .. }
-            | Sdf::Cylinder { .. }
-            | Sdf::Capsule { .. }
-            | Sdf::Plane { .. } => true,
+            Sdf::Sphere { .. } | Sdf::Box { .. } | Sdf::Cylinder { .. } | Sdf::Plane { .. } => true,
+            Sdf::Primitive(primitive) => primitive.is_convex(),
             Sdf::Intersection(children) => children.iter().all(Sdf::is_convex),
             Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.is_convex(),
             _ => false,

@@ -70,22 +70,6 @@ pub(super) fn cylinder<S: Scalar>(
     dx.max(dy).min(S::zero()) + (ox * ox + oy * oy).safe_sqrt() - rb
 }
 
-/// Capsule: distance to the segment `a`–`b` minus `r`; the projection parameter is clamped to `[0, 1]`
-/// (a degenerate segment `a = b` is a sphere).
-#[inline(always)]
-pub(super) fn capsule<S: Scalar>(p: Vec3<S>, a: &Param3, b: &Param3, radius: &Param) -> S {
-    let a = a.get::<S>();
-    let pa = p - a;
-    let ba = b.get::<S>() - a;
-    let bb = ba.length_squared();
-    let t = if bb.primal() > 0.0 {
-        (pa.dot(ba) / bb).clamp(0.0, 1.0)
-    } else {
-        S::zero()
-    };
-    (pa - ba * t).length() - radius.get::<S>()
-}
-
 /// Half-space: `n·p − offset`.
 #[inline(always)]
 pub(super) fn plane<S: Scalar>(p: Vec3<S>, normal: glam::Vec3, offset: &Param) -> S {
@@ -130,12 +114,6 @@ pub(super) fn cylinder_bounds(
 ) -> Aabb {
     let r = axis.abs() * half_height.value.abs() + circle_extent(axis) * radius.value.abs();
     Aabb::around(center.value(), r)
-}
-
-/// Box of a capsule: the segment's box grown by the radius.
-pub(super) fn capsule_bounds(a: &Param3, b: &Param3, radius: &Param) -> Aabb {
-    let (a, b) = (a.value(), b.value());
-    Aabb::new(a.min(b), a.max(b)).expanded(radius.value.abs())
 }
 
 /// The declarations of the primitives' fields ([`crate::declare`]).
@@ -318,23 +296,6 @@ pub(super) mod kinds {
             _ => unreachable!("a cylinder's rule"),
         }
     }
-
-    /// `{"type": "capsule", "a", "b", "radius"}`.
-    pub(in crate::sdf) const CAPSULE: Kind<Sdf> = Kind {
-        type_name: "capsule",
-        fields: &[
-            point("a", on!(Sdf::Capsule { a, .. } => a)),
-            point("b", on!(Sdf::Capsule { b, .. } => b)),
-            number(
-                "radius",
-                on!(Sdf::Capsule { radius, .. } => radius),
-                None,
-                Rule::Positive,
-            ),
-        ],
-        blank: || Sdf::capsule(zero3(), zero3(), 0.0),
-        example: r#"{"type": "capsule", "a": [-0.5, 0.3, 0], "b": [0.5, 0.3, 0], "radius": 0.3}"#,
-    };
 
     /// `{"type": "plane", "normal", "offset"}`: the half-space `normal · p <= offset`.
     pub(in crate::sdf) const PLANE: Kind<Sdf> = Kind {
