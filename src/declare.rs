@@ -66,6 +66,14 @@ impl Components {
     }
 }
 
+/// A check of a field just read, which may adjust it and look at the fields read before it: the
+/// message of a broken rule.
+pub type Adjust<N> = fn(&mut N) -> Result<(), String>;
+
+/// A check of a field just read, which may look at the fields read before it: the message of a broken
+/// rule.
+pub type Check<N> = fn(&N) -> Result<(), String>;
+
 /// What a field holds.
 pub enum Value<N: 'static> {
     /// A number: parameter `<prefix>.<key>`.
@@ -103,7 +111,7 @@ pub enum Value<N: 'static> {
         access: Access<N, glam::Vec3>,
         /// A check (or adjustment) after reading, which may look at the fields read before this one:
         /// the message of a broken rule.
-        after: Option<fn(&mut N) -> Result<(), String>>,
+        after: Option<Adjust<N>>,
     },
     /// A point that is not a parameter (a grid's box).
     Fixed {
@@ -111,7 +119,7 @@ pub enum Value<N: 'static> {
         access: Access<N, glam::Vec3>,
         /// A check after reading, which may look at the fields read before this one: the message of a
         /// broken rule.
-        after: Option<fn(&N) -> Result<(), String>>,
+        after: Option<Check<N>>,
     },
     /// A rotation `{"axis": [x, y, z], "angle": degrees}`, by default none (the angle 0 about `+y`):
     /// the angle is parameter `<prefix>.angle`, the axis a unit direction.
