@@ -7,7 +7,8 @@
 //! 2. **Time to 5% error** of the complete derivative and of central finite differences for
 //!    `ball.radius`, `ball.center.x` and `light.center.x`: the protocol of the `report` command
 //!    (`implicit_psdr::report`, every estimator, its default budget and references), so that the
-//!    README's table and `implicit-psdr report` are one measurement. Prints the table's rows.
+//!    table of docs/performance.md and `implicit-psdr report` are one measurement. Prints the table's
+//!    rows.
 //!
 //! The machine is shared: medians and ratios, never one absolute time. `cargo bench --bench complete
 //! [-- REPS]`.
@@ -105,7 +106,7 @@ fn main() {
     time_to_five_percent();
 }
 
-/// Part 2: the `report` protocol on the default scene, and the README's rows from it.
+/// Part 2: the `report` protocol on the default scene, and the rows of docs/performance.md from it.
 fn time_to_five_percent() {
     let params: Vec<String> = ["ball.radius", "ball.center.x", "light.center.x"]
         .map(String::from)

@@ -1,5 +1,5 @@
-//! The ablation figure of the README: IoU and Chamfer distance against the iteration, the complete
-//! gradient against the interior term alone, one row per example, from the runs' `progress.csv`.
+//! The ablation figure of docs/inverse-rendering.md: IoU and Chamfer distance against the iteration,
+//! the complete gradient against the interior term alone, one row per example, from the runs' `progress.csv`.
 //!
 //! `cargo run --release --example ablation_figure -- OUT.png ROW [ROW ...] [--font FILE.ttf]`, each
 //! `ROW` as `TITLE=DIAGONAL=COMPLETE.csv=INTERIOR.csv`: the Chamfer distance is drawn in percent of

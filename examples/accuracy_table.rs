@@ -1,5 +1,5 @@
-//! The README's accuracy table: relative L2 error of `diff`'s derivative images against central
-//! finite differences, per pixel and after a 5×5 box blur (the blur averages pixel noise away), at the
+//! The accuracy table of docs/derivatives.md: relative L2 error of `diff`'s derivative images against
+//! central finite differences, per pixel and after a 5×5 box blur (the blur averages pixel noise away), at the
 //! settings a user gets by default (the scene's spp, default boundary budgets), for both pixel
 //! normalisations and for the interior term alone. Mean over three seeds.
 //!

@@ -1,5 +1,5 @@
-//! The README's "Boundary sample budgets" measurement: for several pairs of boundary budgets
-//! (primary + secondary samples per pixel) at the scene's own spp, the noise of `diff`'s complete
+//! The "Boundary sample budgets" measurement of docs/derivatives.md: for several pairs of boundary
+//! budgets (primary + secondary samples per pixel) at the scene's own spp, the noise of `diff`'s complete
 //! derivative times its time, the figure of merit of a Monte Carlo estimator (lower is better).
 //!
 //! The noise is measured without a reference: two renders with different seeds differ by twice the

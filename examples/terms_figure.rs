@@ -1,5 +1,5 @@
-//! The README's picture of the derivative's terms: for one parameter of a scene, a row of panels
-//! `image | interior | primary | secondary | total | fd`, the derivative panels on one symmetric colour
+//! The picture of the derivative's terms in docs/derivatives.md: for one parameter of a scene, a row of
+//! panels `image | interior | primary | secondary | total | fd`, the derivative panels on one symmetric colour
 //! scale (blue negative, white zero, red positive; the scale of the `fd` panel), written as a PNG.
 //!
 //! `cargo run --release --example terms_figure -- SCENE.json PARAM OUT.png [SIZE] [SPP]`

@@ -2,8 +2,33 @@
 //! the same code produces images (`f32`) and derivative images (dual numbers), following *Path-Space
 //! Differentiable Rendering of Implicit Surfaces* (Zhou et al., SIGGRAPH 2024).
 //!
-//! Data flows one way: scene file ([`scene`]) → [`scene::Scene`] (stored in `f32`) → tracer ([`trace`],
-//! `f32`) → integrand in `S: Scalar` ([`integrator`], [`bsdf`], [`emitter`], [`camera`]) → [`film`] → EXR/PNG.
+//! The user guide is in the repository's `docs/` folder (the command line, the scene format, the
+//! derivatives and their options, reverse mode, performance); `docs/library.md` shows the library's
+//! calls, and the example of [`integrator`] runs them.
+//!
+//! # Where to start reading
+//!
+//! Data flows one way: scene file → scene → tracer → integrand → film → EXR/PNG.
+//!
+//! 1. **Scene.** [`scene::load`] parses a scene file into a [`scene::Scene`] (stored in `f32`): its
+//!    [`scene::Shape`]s, each an [`sdf::Sdf`] tree with a material from [`bsdf`]; its emitters
+//!    ([`scene::NamedEmitter`], [`emitter`]); its [`camera::Camera`]. Numbers that can be differentiated
+//!    are [`Param`]s; [`scene::Scene::select_parameters`] chooses which of them carry derivatives.
+//! 2. **Tracer**, in `f32`. [`scene::Scene::intersect`] finds a ray's first hit through [`trace`]
+//!    (sphere tracing, closed forms where the answer is certain, [`trace::TraceSettings`] for the
+//!    tolerances); [`integrator::path::trace_path`] records a whole light path as a
+//!    [`integrator::path::PathRecord`].
+//! 3. **Integrand**, in `S: `[`Scalar`]. [`integrator::path::contribution`] evaluates a recorded path's
+//!    contribution with `f32` for the image, [`scalar::DualN`] for derivative images and
+//!    [`scalar::Rev`] for gradients; surface points move with the parameters through
+//!    [`integrator::attach`]. The boundary terms are in [`integrator::boundary`].
+//! 4. **Film.** Every estimator hands its samples to a [`film::Film`] ([`film::PixelFilm`] for camera
+//!    samples, [`film::SplatFilm`] for boundary samples, [`film::AdjointFilm`] for reverse mode) through
+//!    one parallel driver ([`integrator::driver::run`]); the result is a [`film::Image`], written by
+//!    [`film::write_exr`].
+//!
+//! The entry points that run all four: [`integrator::render`], [`integrator::render_derivatives`] and
+//! [`integrator::loss_gradient`]; [`optimize`] and [`report`] are built on them.
 //!
 //! Citations in the documentation: "docs/theory.md §k" is the theory as this repository states it
 //! (`docs/theory.md`, with numbered sections and equations); "supplemental §k, eq. m" is the

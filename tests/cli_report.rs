@@ -10,7 +10,7 @@ use implicit_psdr::report::plot::PANEL_SIZE;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// The columns `report.csv` documents (README, "Speed against error").
+/// The columns `report.csv` documents (docs/report.md).
 const COLUMNS: [&str; 11] = [
     "parameter",
     "estimator",

@@ -81,8 +81,8 @@ pub enum Normalization {
     /// Pixel = mean of `w/p · L` over its samples; `W` is treated as the constant it is in expectation.
     Fixed,
     /// Pixel = `F / W` with both sums differentiated (a control variate; unbiased together with `W`'s
-    /// own primary boundary term). The default: at the same cost its error is lower (README, "Pixel
-    /// normalisation").
+    /// own primary boundary term). The default: at the same cost its error is lower
+    /// (docs/derivatives.md, "Pixel normalisation").
     #[default]
     Differentiable,
 }

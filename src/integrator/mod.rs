@@ -8,7 +8,7 @@
 //!
 //! # Example
 //!
-//! An image and derivative images, as in the README's "Using the library" (run as a doc test):
+//! An image and derivative images, as in docs/library.md (run as a doc test):
 //!
 //! ```
 //! use implicit_psdr::integrator::{self, DiffOptions, RenderOptions};

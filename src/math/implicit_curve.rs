@@ -2,7 +2,7 @@
 //! vertices lie on the curve, and points projected onto them with an exact density per unit length.
 //!
 //! Two curves of this kind are sampled: the silhouette seen from an eye (`f = φ`, `g = ∇φ·(c − x)`,
-//! [`super::silhouette_curve`], docs/theory.md §4.2) and the crease where two children of a hard CSG
+//! [`crate::integrator::silhouette_curve`], docs/theory.md §4.2) and the crease where two children of a hard CSG
 //! node cross (`f`, `g` the children's signed distances, docs/theory.md §7.1). The functions come
 //! through [`CurveFunctions`]; where their gradients are independent the curve is smooth with unit
 //! tangent `T = ∇f × ∇g / |∇f × ∇g|`.

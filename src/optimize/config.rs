@@ -1,4 +1,4 @@
-//! The optimisation file `OPT.json` of `implicit-psdr optimize` (see README, "optimize"), parsed strictly
+//! The optimisation file `OPT.json` of `implicit-psdr optimize` (docs/inverse-rendering.md), parsed strictly
 //! as scene files are: unknown fields, wrong types and out-of-range values are errors that name the file
 //! and the field (`opt.json: views_per_iteration: must be <= 2 (the number of views), got 3`); paths
 //! resolve against the file's folder. Everything that can be checked before rendering is checked here:

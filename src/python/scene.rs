@@ -12,7 +12,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Number, Value};
 use std::path::{Path, PathBuf};
 
-/// A scene: what the command-line tool loads from a scene file (see the README's "Scene format"),
+/// A scene: what the command-line tool loads from a scene file (see docs/scene-format.md),
 /// with its parameters and grids, changeable in place.
 ///
 /// Build it with ``Scene.load(path)`` or ``Scene.from_dict(dict)``. ``params()`` lists every

@@ -1,4 +1,4 @@
-//! The JSON scene format (see README, "Scene format"): parsed at the edge into the rendering types, with
+//! The JSON scene format (see docs/scene-format.md): parsed at the edge into the rendering types, with
 //! the path of the offending field in every error.
 //!
 //! serde's derived deserialisers lose the field path in their errors and cannot express "unknown type
@@ -30,7 +30,7 @@ pub const DEFAULT_MAX_DEPTH: u32 = 5;
 /// Largest accepted image side, in pixels (guards against typos that would allocate gigabytes).
 pub const MAX_IMAGE_SIDE: u64 = 16384;
 
-/// The top-level fields of a scene file, in the order of the README's scene format (also the order
+/// The top-level fields of a scene file, in the order of docs/scene-format.md (also the order
 /// [`crate::scene::patch::scene_text`] writes them in).
 pub(crate) const SCENE_KEYS: &[&str] = &[
     "description",

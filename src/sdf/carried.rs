@@ -31,7 +31,7 @@ impl Sdf {
 
     /// The position `X(q; π)` to which the node's motion carries a point `q` of its surface (node
     /// coordinates, parameters lifted into `S`), or `None` where no motion is known (see the
-    /// [module docs](self)). At the primal `X(q) = q` up to rounding; a surface point is carried onto
+    /// module docs of `sdf::carried`). At the primal `X(q) = q` up to rounding; a surface point is carried onto
     /// the moved surface to first order (`∂π φ(X(q; π); π) = 0`).
     pub fn carried<S: Scalar>(&self, q: Vec3<S>) -> Option<Vec3<S>> {
         if !self.moves() {

@@ -148,7 +148,7 @@ impl Placement {
 }
 
 impl Sdf {
-    /// The crease edges of the sharp boxes and cylinders in this tree (see the [module docs](self)), and
+    /// The crease edges of the sharp boxes and cylinders in this tree (see the module docs of `sdf::crease_edges`), and
     /// the chords of the curves where hard CSG children cross ([`super::CrossingCrease::chords`], with
     /// the default extraction settings), in this node's coordinates. Empty when there are none.
     pub fn crease_edges(&self) -> Vec<CreaseEdge> {

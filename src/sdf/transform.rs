@@ -40,7 +40,7 @@ pub struct AngleTrig {
 }
 
 impl AngleTrig {
-    /// The cosine and sine of `degrees`, rounded exactly as [`eval`] computes them.
+    /// The cosine and sine of `degrees`, rounded exactly as `eval` computes them.
     pub fn of(degrees: f32) -> Self {
         let theta = degrees * (std::f32::consts::PI / 180.0);
         Self {

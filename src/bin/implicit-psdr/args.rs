@@ -16,7 +16,7 @@ pub(crate) struct Cli {
 /// The scene and how to sample it, shared by the rendering commands.
 #[derive(Args, Debug)]
 pub(crate) struct SceneArgs {
-    /// The scene file (JSON, see README).
+    /// The scene file (JSON, see docs/scene-format.md).
     pub(crate) scene: PathBuf,
     /// Samples per pixel (default: the scene's `spp`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
@@ -72,8 +72,8 @@ pub(crate) enum Command {
     /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
     Fd(FdArgs),
     /// Inverse rendering: optimise scene parameters and grid values so that renders from several
-    /// views match target images, as OPT.json describes (see README, "optimize"). Writes into --out:
-    /// progress.csv, loss.png, views.png (per view: target | current), NODE.npy per optimised grid and
+    /// views match target images, as OPT.json describes (see docs/inverse-rendering.md). Writes into
+    /// --out: progress.csv, loss.png, views.png (per view: target | current), NODE.npy per optimised grid and
     /// result.json (the optimised scene).
     Optimize(OptimizeArgs),
     /// Speed against error: runs each estimator at spp 1, 2, 4, ... (two seeds per point) until its
@@ -188,7 +188,7 @@ pub(crate) struct GradArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct OptimizeArgs {
-    /// The optimisation file (JSON, see README, "optimize"); the paths in it are relative to it.
+    /// The optimisation file (JSON, see docs/inverse-rendering.md); the paths in it are relative to it.
     #[arg(value_name = "OPT.json")]
     pub(crate) config: PathBuf,
     /// Output folder, created if missing. Targets rendered from a scene are cached in DIR/targets/;
@@ -199,7 +199,7 @@ pub(crate) struct OptimizeArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct ReportArgs {
-    /// The scene file (JSON, see README).
+    /// The scene file (JSON, see docs/scene-format.md).
     pub(crate) scene: PathBuf,
     /// A parameter to report on (repeat for several; see `params`).
     #[arg(long = "param", value_name = "P", required = true)]

@@ -1,5 +1,5 @@
-//! The `optimize` command: inverse rendering as an `OPT.json` describes it (see README, "optimize"),
-//! with its outputs in one folder.
+//! The `optimize` command: inverse rendering as an `OPT.json` describes it (see
+//! docs/inverse-rendering.md), with its outputs in one folder.
 //!
 //! Everything is checked before anything is rendered (the file, the scenes, the views, the target
 //! images, the parameters and grids) and before the output folder is touched. Targets rendered from a
