@@ -28,9 +28,9 @@
 
 use super::crease_edges::{CreaseEdges, face_gradient};
 use super::run_samples;
-use super::secondary::{Context, Occluder};
-use super::tangent_sampling::TangentSampling;
+use super::shadow_segment::{Occluder, segment};
 use crate::film::{Film, SampleSink};
+use crate::integrator::attach::SceneAttach;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::Progress;
 use crate::integrator::path::TraceCounters;
@@ -104,7 +104,7 @@ where
     if edges.is_empty() {
         return RenderStats::default();
     }
-    let ctx = Context::new(scene, TangentSampling::Steered);
+    let attach = SceneAttach::new(scene);
     run_samples::<S, F, _>(
         film,
         samples,
@@ -112,20 +112,20 @@ where
         (seed, CREASE_SHADOW_STREAM),
         || (),
         |_, sampler, counters, splats| {
-            sample(&ctx, &edges, sampler, splats, counters);
+            sample(scene, &attach, &edges, sampler, splats, counters);
         },
     )
 }
 
 /// One sample (module docs): pushes its contributions, not yet divided by the sample count.
 fn sample<S: Directions>(
-    ctx: &Context,
+    scene: &Scene,
+    attach: &SceneAttach,
     edges: &CreaseEdges,
     sampler: &mut Sampler,
     splats: &mut impl SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
-    let scene = ctx.scene;
     let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {
         return;
     };
@@ -163,5 +163,15 @@ fn sample<S: Directions>(
         end => end,
     });
     let occluder = Occluder::Crease(m, edge, pt.tangent, grads);
-    ctx.segment(occluder, (x_b, o), &s_end, &d_end, weight, splats, counters);
+    segment(
+        scene,
+        attach,
+        occluder,
+        (x_b, o),
+        &s_end,
+        &d_end,
+        weight,
+        splats,
+        counters,
+    );
 }

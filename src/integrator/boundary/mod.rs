@@ -22,6 +22,7 @@ mod frustum;
 pub mod primary;
 pub mod secondary;
 pub mod segment;
+mod shadow_segment;
 pub mod subpaths;
 pub mod tangent_sampling;
 
