@@ -115,23 +115,22 @@
 //! changes to how `(x_B, θ_B)` are drawn.
 //!
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
-//! boxes and cylinders and of hard CSG ([`super::crease_shadows`], through [`Occluder`]); [`split`] shares the samples
-//! between them and the tear of creased surfaces at later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
+//! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, `shadow_segment`, for any
+//! occluder); [`SecondarySources`] shares the samples between them and the tear of creased surfaces at
+//! later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
 //! the creases of hard CSG between unbounded children.
 
-use super::crease_shadows::run_crease_shadows;
-use super::crease_tears;
+use super::crease_shadows::CreaseShadows;
+use super::crease_tears::CreaseTears;
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::{Occluder, segment};
+use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch, term_images};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{accumulate_samples, run_samples, split_equally};
 use crate::error::Result;
-use crate::film::{Film, Image, SampleSink};
-use crate::integrator::attach::SceneAttach;
-use crate::integrator::attach::for_each_window;
+use crate::film::{Image, SampleSink};
 use crate::integrator::driver::RenderStats;
-use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
+use crate::integrator::options::{DiffOptions, require_continuous_filter};
 use crate::integrator::path::TraceCounters;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::Ray;
@@ -167,28 +166,12 @@ pub fn render_secondary_with(
     samples: u64,
     tangent: TangentSampling,
 ) -> Result<Vec<Image>> {
-    Ok(dispatch_directions!(
-        count,
-        render_secondary_in(scene, count, options, samples, tangent)
-    )?
-    .0)
+    Ok(secondary_term(scene, count, options, samples, tangent)?.0)
 }
 
-/// [`render_secondary`] with the counts of the traced rays.
-pub fn render_secondary_terms(
-    scene: &Scene,
-    count: usize,
-    options: &DiffOptions,
-    samples: u64,
-) -> Result<(Vec<Image>, RenderStats)> {
-    dispatch_directions!(
-        count,
-        render_secondary_in(scene, count, options, samples, TangentSampling::Steered)
-    )
-}
-
-/// [`render_secondary_with`] with a chosen scalar type, in passes of `S::COUNT` parameters.
-pub fn render_secondary_in<S: Directions>(
+/// [`render_secondary_with`] with the counts of the traced rays, in passes of the widest dual number
+/// `count` needs.
+pub(crate) fn secondary_term(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,
@@ -196,97 +179,48 @@ pub fn render_secondary_in<S: Directions>(
     tangent: TangentSampling,
 ) -> Result<(Vec<Image>, RenderStats)> {
     require_continuous_filter(scene, "the secondary boundary term")?;
-    let mut stats = RenderStats::default();
-    let mut images = Vec::with_capacity(count);
     if count == 0 {
-        return Ok((images, stats));
+        return Ok((Vec::new(), RenderStats::default()));
     }
-    let seed = options.render.seed;
-    let progress = &options.render.progress;
-    for (pass_images, pass_stats) in for_each_window(scene, count, S::COUNT, |windowed, width| {
-        pass::<S>(windowed, width, seed, samples, tangent, progress)
-    }) {
-        images.extend(pass_images);
-        stats.absorb(pass_stats);
-    }
+    let sources = SecondarySources::of(scene, tangent);
+    let render = &options.render;
+    let (images, _, stats) = dispatch_directions!(
+        count,
+        term_images(scene, count, render, samples, &sources, false)
+    );
     Ok((images, stats))
 }
 
-/// One pass over all boundary samples: directions `0..width` of `S`.
-fn pass<S: Directions>(
-    scene: &Scene,
-    width: usize,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-) -> (Vec<Image>, RenderStats) {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let mut images = vec![Image::new(w, h); width];
-    let mut stats = RenderStats::default();
-    for (source, n) in split(scene, samples) {
-        stats.absorb(accumulate_samples::<S>(
-            scene,
-            width,
-            n,
-            |film| run_source::<S, _>(scene, source, seed, n, tangent, progress, film),
-            &mut images,
-            &mut [],
-        ));
+/// Everything the secondary term samples, prepared once per render: the tangent lines of smooth
+/// silhouettes (this module), lines past crease edges ([`super::crease_shadows`]) and the tear of
+/// creased surfaces at vertices after the first ([`super::crease_tears`]), which share its samples
+/// equally (those the scene has no occluder for take no share).
+pub struct SecondarySources {
+    /// Tangent lines of curved shapes.
+    pub silhouettes: SilhouetteShadows,
+    /// Lines past crease edges.
+    pub crease_shadows: CreaseShadows,
+    /// The tear of creased surfaces.
+    pub crease_tears: CreaseTears,
+}
+
+impl SecondarySources {
+    /// The occluders of `scene`, tangent angles drawn by `tangent`. The crease edges are listed (and
+    /// extracted) only where a crease term exists.
+    pub fn of(scene: &Scene, tangent: TangentSampling) -> Self {
+        let crease_shadows = CreaseShadows::of(scene);
+        let crease_tears = CreaseTears::of(scene, crease_shadows.edges());
+        Self {
+            silhouettes: SilhouetteShadows::of(scene, tangent),
+            crease_shadows,
+            crease_tears,
+        }
     }
-    (images, stats)
 }
 
-/// One kind of occluder the secondary term samples.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum SecondarySource {
-    /// Smooth silhouettes of curved shapes (tangent lines, this module).
-    Silhouettes,
-    /// Crease edges of sharp boxes and cylinders ([`super::crease_shadows`]).
-    CreaseEdges,
-    /// The tear of creased surfaces' parametrisation at vertices after the first
-    /// ([`super::crease_tears`]; integrators with two or more scattering vertices).
-    CreaseTears,
-}
-
-/// How `samples` secondary samples are shared: equally between the kinds of occluder the scene has.
-pub fn split(scene: &Scene, samples: u64) -> Vec<(SecondarySource, u64)> {
-    split_equally(
-        samples,
-        &[
-            (
-                SecondarySource::Silhouettes,
-                !curved_shapes(scene).is_empty(),
-            ),
-            (SecondarySource::CreaseEdges, scene.has_crease_edges()),
-            (SecondarySource::CreaseTears, crease_tears::applies(scene)),
-        ],
-    )
-}
-
-/// `samples` samples of one kind into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_source<S: Directions, F: Film>(
-    scene: &Scene,
-    source: SecondarySource,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    match source {
-        SecondarySource::Silhouettes => {
-            run_segments::<S, F>(scene, seed, samples, tangent, progress, film)
-        }
-        SecondarySource::CreaseEdges => {
-            run_crease_shadows::<S, F>(scene, seed, samples, progress, film)
-        }
-        SecondarySource::CreaseTears => {
-            crease_tears::run_crease_tears::<S, F>(scene, seed, samples, progress, film)
-        }
+impl BoundaryTerm for SecondarySources {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![&self.silhouettes, &self.crease_shadows, &self.crease_tears]
     }
 }
 
@@ -301,38 +235,8 @@ fn curved_shapes(scene: &Scene) -> Vec<usize> {
         .collect()
 }
 
-/// The boundary samples `0..samples` into any film (their shares not yet divided by `samples`).
-fn run_segments<S: Directions, F: Film>(
-    scene: &Scene,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    let ctx = Context::new(scene, tangent);
-    if ctx.candidates.is_empty() {
-        return RenderStats::default();
-    }
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("secondary", progress),
-        (seed, BOUNDARY_STREAM),
-        Vec::new,
-        |hits, sampler, counters, splats| {
-            ctx.sample(sampler, hits, splats, counters);
-        },
-    )
-}
-
-/// What every boundary sample needs.
-pub(crate) struct Context<'a> {
-    pub(crate) scene: &'a Scene,
-    attach: SceneAttach<'a>,
+/// The tangent lines of smooth silhouettes: eq. (2)'s boundary samples.
+pub struct SilhouetteShadows {
     /// Curved shapes with finite bounds (the ones [`sample_surface`] can sample and whose tangent lines
     /// can be silhouettes), chosen uniformly.
     candidates: Vec<usize>,
@@ -340,30 +244,53 @@ pub(crate) struct Context<'a> {
     tangent: TangentSampler,
 }
 
-impl<'a> Context<'a> {
-    /// The context of `scene`'s boundary samples, `θ_B` drawn by `tangent`.
-    pub(crate) fn new(scene: &'a Scene, tangent: TangentSampling) -> Self {
-        let candidates = curved_shapes(scene);
+impl SilhouetteShadows {
+    /// The curved shapes of `scene`, `θ_B` drawn by `tangent`.
+    pub fn of(scene: &Scene, tangent: TangentSampling) -> Self {
         Self {
-            scene,
-            attach: SceneAttach::new(scene),
-            candidates,
+            candidates: curved_shapes(scene),
             tangent: TangentSampler::new(scene, tangent),
         }
     }
 }
 
-impl Context<'_> {
+impl<S: Directions> BoundarySource<S> for SilhouetteShadows {
+    fn stage(&self) -> &'static str {
+        "secondary"
+    }
+
+    fn stream(&self) -> u64 {
+        BOUNDARY_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        !self.candidates.is_empty()
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        self.sample_lines(pass, sampler, &mut scratch.hits, sink, counters);
+    }
+}
+
+impl SilhouetteShadows {
     /// One boundary sample: a shape, a line of area samples on it, one tangent angle per hit; pushes the
     /// weighted contributions `(pixel, value)` of eq. (2) (not yet divided by the sample count).
-    fn sample<S: Directions>(
+    fn sample_lines<S: Directions>(
         &self,
+        pass: &Pass,
         sampler: &mut Sampler,
         hits: &mut Vec<SurfaceSample>,
-        splats: &mut impl SampleSink<S>,
+        splats: &mut dyn SampleSink<S>,
         counters: &mut TraceCounters,
     ) {
-        let scene = self.scene;
+        let scene = pass.scene;
         let k = self.candidates.len();
         let pick = ((sampler.next_1d() * k as f32) as usize).min(k - 1);
         let m = self.candidates[pick];
@@ -407,17 +334,7 @@ impl Context<'_> {
             for (s_end, d_end) in [(&ends[1], &ends[0]), (&ends[0], &ends[1])] {
                 let occluder = Occluder::Silhouette(m);
                 let line = (hit.p, o);
-                segment(
-                    scene,
-                    &self.attach,
-                    occluder,
-                    line,
-                    s_end,
-                    d_end,
-                    weight,
-                    splats,
-                    counters,
-                );
+                segment(pass, occluder, line, s_end, d_end, weight, splats, counters);
             }
         }
     }

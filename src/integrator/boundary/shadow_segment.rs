@@ -6,10 +6,10 @@
 
 use super::crease_segment::CreaseSegment;
 use super::segment::{BoundarySegment, boundary_velocity};
+use super::source::Pass;
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::{finite_splat, splat_on_film};
 use crate::film::SampleSink;
-use crate::integrator::attach::SceneAttach;
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::shading::geometry_term;
 use crate::math::{Ray, Vec3};
@@ -118,16 +118,16 @@ fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
 /// `line_origin` is `x_b` pushed off the occluder, where the line was traced from.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn segment<S: Directions>(
-    scene: &Scene,
-    attach: &SceneAttach,
+    pass: &Pass,
     occluder: Occluder,
     (x_b, line_origin): (glam::Vec3, glam::Vec3),
     s_end: &Intersection,
     d_end: &Intersection,
     weight: f32,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
+    let (scene, attach) = (pass.scene, &pass.attach);
     let depth = scene.integrator.max_scatter();
     let Intersection::Hit(s_hit) = s_end else {
         return;
