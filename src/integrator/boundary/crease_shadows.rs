@@ -20,7 +20,7 @@
 //! `path` integrator) or on occluded emitters keep their share. The line through `x_B` along `ω` is
 //! traced both ways from `x_B` pushed off the edge along its faces' mean normal; its first hits are
 //! `x_D` (along `ω`) and `x_S` (along `−ω`): one oriented segment per sample, whose direction is `ω`.
-//! Unless the faces lie on opposite sides of the line ([`CreaseSegment::is_boundary`]) the sample
+//! Unless the faces lie on opposite sides of the line ([`super::crease_segment::CreaseSegment::is_boundary`]) the sample
 //! contributes nothing, nor on a concave edge ([`crate::sdf::CreaseEdge::inverted`]: every line through
 //! it enters the solid on both sides). It contributes eq. (2) of [`super::secondary`] with the crease's change of
 //! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an

@@ -23,7 +23,7 @@ mod frustum;
 pub mod primary;
 pub mod secondary;
 pub mod segment;
-mod shadow_segment;
+pub mod shadow_segment;
 pub mod source;
 pub mod subpaths;
 pub mod tangent_sampling;

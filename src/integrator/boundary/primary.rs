@@ -70,7 +70,7 @@
 //!
 //! Let the parameters move with the background point held: the ray from the lifted eye `c(π)` is
 //! `x(π) = c(π) + |c x_B| d̂(π)` at the depth of `x_B`, with `d̂` the unit direction towards the attached
-//! `x_D(π)` ([`SceneAttach`]), or for a background at infinity the fixed direction `d̂` through the film
+//! `x_D(π)` ([`crate::integrator::attach::SceneAttach`]), or for a background at infinity the fixed direction `d̂` through the film
 //! point `u`, `r (u_x − c_x) − up (u_y − c_y) + f̂ f` normalised, in the primal camera frame. The tangency
 //! residual `h(π) = φ_π(x(π))` (shape parameters lifted too) is 0 at the primal. Moving `u` by `δ n_img`
 //! (or the film point of `x_D` by `δ n_img`: the same change of direction) changes it by

@@ -115,7 +115,7 @@
 //! changes to how `(x_B, θ_B)` are drawn.
 //!
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
-//! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, `shadow_segment`, for any
+//! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, [`super::shadow_segment`], for any
 //! occluder); [`SecondarySources`] shares the samples between them and the tear of creased surfaces at
 //! later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,

@@ -5,7 +5,7 @@
 //! listed) and then only answers for one sample at a time: it draws from the [`Sampler`] of its own
 //! random stream and hands its contributions to a [`SampleSink`]. [`run_source`] runs its samples in
 //! parallel chunks on the [`driver`]; [`run_term`] shares a term's budget between its sources
-//! ([`split_equally`]) and gives each a film of its own, which the caller turns into images (forward
+//! (equally, the first ones taking the remainder) and gives each a film of its own, which the caller turns into images (forward
 //! mode, [`term_images`]) or into gradient entries (reverse mode). A term lists its sources in one
 //! place ([`BoundaryTerm::sources`]).
 
