@@ -58,7 +58,7 @@ pub trait Film: Sync {
 /// Splats `radiance` and `weight` at film point `p` (pixels) to every pixel of a `width × height`
 /// image whose filter covers it, each weighted by that pixel's filter (evaluated in `f32`).
 pub fn splat_filtered<S: Scalar>(
-    sink: &mut impl SampleSink<S>,
+    sink: &mut (impl SampleSink<S> + ?Sized),
     filter: &Filter,
     (width, height): (u32, u32),
     p: glam::Vec2,

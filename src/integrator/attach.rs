@@ -141,7 +141,9 @@ impl<'a> SceneAttach<'a> {
         }
         let shape = &self.scene.shapes[i];
         let moved = match &self.field[i] {
-            Some(field) => field.vertex(shape, p, n),
+            Some(field) => field
+                .motion(shape, p, n)
+                .and_then(|(d, div)| surface_vertex(shape, p, n, d, div)),
             None => surface_vertex(shape, p, n, Vec3::zero(), S::zero()),
         };
         moved.unwrap_or(constant)

@@ -27,8 +27,6 @@
 //!   children's normals are nearly parallel (their crease is ill-conditioned there). `∇w` enters the
 //!   divergence through the Jacobian, of order `1/ℓ`, not `1/k`.
 
-use super::attach::surface_vertex;
-use super::path::Attached;
 use crate::math::Vec3;
 use crate::scalar::{Grad, Scalar};
 use crate::scene::{Scene, Shape, VelocityField};
@@ -77,14 +75,15 @@ impl<'a> Field<'a> {
         (shape.sdf.curvature_bound() * nearest * pixel > 1.0).then_some(known)
     }
 
-    /// The attached vertex of `shape`'s point `p` (normal `n`) moved by this field; `None` where the
-    /// motion or the gradient is undefined.
-    pub fn vertex<S: Scalar>(
+    /// How this field moves `shape`'s point `p` (normal `n`): the motion `d` (derivative parts only,
+    /// primal zero) and its surface divergence `∇_Γ·d`, from which the attached vertex is built
+    /// ([`crate::integrator::attach`], eq. 8.1); `None` where the motion is undefined.
+    pub fn motion<S: Scalar>(
         &self,
         shape: &Shape,
         p: glam::Vec3,
         n: glam::Vec3,
-    ) -> Option<Attached<S>> {
+    ) -> Option<(Vec3<S>, S)> {
         let u = match self {
             Field::Carried => {
                 let seed = Grad::<S>::seed(p - shape.translate.value());
@@ -107,7 +106,7 @@ impl<'a> Field<'a> {
                 div -= jac(i, j) * (nv[i] * nv[j]);
             }
         }
-        surface_vertex(shape, p, n, d - d.detach(), div)
+        Some((d - d.detach(), div))
     }
 }
 

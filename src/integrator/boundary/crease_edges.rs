@@ -68,14 +68,12 @@
 //! faces' tangent planes at the edge point instead (docs/theory.md §7.2).
 
 use super::frustum::Frustum;
+use super::source::{BoundarySource, Pass, Scratch};
 use super::{
     BACKGROUND_OFFSET_PIXELS, attached_first_vertex, background_offset, film_velocity,
-    finite_splat, hidden_before, on_film, projection_jacobian, run_samples, splat_on_film,
+    finite_splat, hidden_before, on_film, projection_jacobian, splat_on_film,
 };
-use crate::film::{Film, SampleSink};
-use crate::integrator::attach::SceneAttach;
-use crate::integrator::driver::RenderStats;
-use crate::integrator::options::RenderOptions;
+use crate::film::SampleSink;
 use crate::integrator::path::{
     PathRecord, TraceCounters, contribution, detached, trace_path_after,
 };
@@ -308,44 +306,45 @@ pub fn moving_edge_point<S: Scalar>(
     Some(Vec3::constant(x) - Vec3::constant(ga) * alpha - Vec3::constant(gb) * beta)
 }
 
-/// The crease samples `0..samples` of eq. (3) into any film (their shares not yet divided by
-/// `samples`).
-pub(crate) fn run_creases<S: Directions, F: Film>(
-    scene: &Scene,
-    creases: &CreaseEdges,
-    render: &RenderOptions,
-    samples: u64,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    if creases.is_empty() {
-        return RenderStats::default();
+/// The crease edges in view ([`CreaseEdges::seen_from`]): eq. (3)'s samples.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CreasesInView(pub CreaseEdges);
+
+impl<S: Directions> BoundarySource<S> for CreasesInView {
+    fn stage(&self) -> &'static str {
+        "primary (crease edges)"
     }
-    let attach = SceneAttach::new(scene);
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("primary (crease edges)", &render.progress),
-        (render.seed, CREASE_STREAM),
-        PathRecord::default,
-        |record, sampler, counters, splats| {
-            sample(scene, &attach, creases, sampler, record, splats, counters);
-        },
-    )
+
+    fn stream(&self) -> u64 {
+        CREASE_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        !self.0.is_empty()
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        sample(pass, &self.0, sampler, &mut scratch.record, sink, counters);
+    }
 }
 
 /// One sample of eq. (3): pushes `(pixel, radiance, coverage)` splats (not yet divided by `N`).
 fn sample<S: Directions>(
-    scene: &Scene,
-    attach: &SceneAttach,
+    pass: &Pass,
     creases: &CreaseEdges,
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
+    let (scene, attach) = (pass.scene, &pass.attach);
     let Some((pt, m, edge)) = creases.sample_on_surface(scene, sampler) else {
         return;
     };

@@ -72,7 +72,7 @@ pub struct CreaseSegment {
 
 impl CreaseSegment {
     /// The segment from `x_s` (normal `n_s`) past the edge point `x_b` (unit edge tangent `tangent`,
-    /// face gradients `grads` there: `integrator::boundary::crease_edges::face_gradient`) to
+    /// face gradients `grads` there: `crease_edges::face_gradient`) to
     /// `x_d` (normal `n_d`); `None` if the points are not distinct.
     pub fn new(
         (x_s, x_b, x_d): (glam::Vec3, glam::Vec3, glam::Vec3),

@@ -20,20 +20,16 @@
 //! `path` integrator) or on occluded emitters keep their share. The line through `x_B` along `ω` is
 //! traced both ways from `x_B` pushed off the edge along its faces' mean normal; its first hits are
 //! `x_D` (along `ω`) and `x_S` (along `−ω`): one oriented segment per sample, whose direction is `ω`.
-//! Unless the faces lie on opposite sides of the line
-//! ([`super::crease_segment::CreaseSegment::is_boundary`]) the sample contributes nothing, nor on a
-//! concave edge ([`crate::sdf::CreaseEdge::inverted`]: every line through
+//! Unless the faces lie on opposite sides of the line ([`super::crease_segment::CreaseSegment::is_boundary`]) the sample
+//! contributes nothing, nor on a concave edge ([`crate::sdf::CreaseEdge::inverted`]: every line through
 //! it enters the solid on both sides). It contributes eq. (2) of [`super::secondary`] with the crease's change of
 //! measure ((B2) of [`super::crease_segment`]) in place of eq. (A), weighted by `Λ / p(ω)`. Points of an
 //! edge that are not on the shape's surface (inside another CSG child, or cut away) contribute 0.
 
 use super::crease_edges::{CreaseEdges, face_gradient};
-use super::run_samples;
-use super::secondary::{Context, Occluder};
-use super::tangent_sampling::TangentSampling;
-use crate::film::{Film, SampleSink};
-use crate::integrator::driver::RenderStats;
-use crate::integrator::options::Progress;
+use super::shadow_segment::{Occluder, segment};
+use super::source::{BoundarySource, Pass, Scratch};
+use crate::film::SampleSink;
 use crate::integrator::path::TraceCounters;
 use crate::math::Ray;
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
@@ -90,43 +86,71 @@ pub(crate) fn sample_direction(
     (pdf > 0.0 && pdf.is_finite()).then_some((w, pdf))
 }
 
-/// The crease-shadow samples `0..samples` into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_crease_shadows<S: Directions, F: Film>(
-    scene: &Scene,
-    seed: u64,
-    samples: u64,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    let edges = CreaseEdges::all(scene);
-    if edges.is_empty() {
-        return RenderStats::default();
+/// Every crease edge of the scene, whole ([`CreaseEdges::all`]): the lines of the module docs.
+#[derive(Clone, Debug, Default)]
+pub struct CreaseShadows {
+    /// Whether the scene's shapes have crease edges (the term takes a share of the samples).
+    creased: bool,
+    edges: CreaseEdges,
+}
+
+impl CreaseShadows {
+    /// The crease edges of `scene` (extracted only when a shape has some).
+    pub fn of(scene: &Scene) -> Self {
+        let creased = scene.has_crease_edges();
+        Self {
+            creased,
+            edges: if creased {
+                CreaseEdges::all(scene)
+            } else {
+                CreaseEdges::default()
+            },
+        }
     }
-    let ctx = Context::new(scene, TangentSampling::Steered);
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("secondary (crease edges)", progress),
-        (seed, CREASE_SHADOW_STREAM),
-        || (),
-        |_, sampler, counters, splats| {
-            sample(&ctx, &edges, sampler, splats, counters);
-        },
-    )
+
+    /// The edges.
+    pub fn edges(&self) -> &CreaseEdges {
+        &self.edges
+    }
+}
+
+impl<S: Directions> BoundarySource<S> for CreaseShadows {
+    fn stage(&self) -> &'static str {
+        "secondary (crease edges)"
+    }
+
+    fn stream(&self) -> u64 {
+        CREASE_SHADOW_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        self.creased
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        _scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        // Edges that extract to nothing take their share but have nothing to sample.
+        if !self.edges.is_empty() {
+            sample(pass, &self.edges, sampler, sink, counters);
+        }
+    }
 }
 
 /// One sample (module docs): pushes its contributions, not yet divided by the sample count.
 fn sample<S: Directions>(
-    ctx: &Context,
+    pass: &Pass,
     edges: &CreaseEdges,
     sampler: &mut Sampler,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
-    let scene = ctx.scene;
+    let scene = pass.scene;
     let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {
         return;
     };
@@ -164,5 +188,14 @@ fn sample<S: Directions>(
         end => end,
     });
     let occluder = Occluder::Crease(m, edge, pt.tangent, grads);
-    ctx.segment(occluder, (x_b, o), &s_end, &d_end, weight, splats, counters);
+    segment(
+        pass,
+        occluder,
+        (x_b, o),
+        &s_end,
+        &d_end,
+        weight,
+        splats,
+        counters,
+    );
 }

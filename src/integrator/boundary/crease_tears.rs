@@ -37,12 +37,11 @@
 
 use super::crease_edges::{CreaseEdges, face_gradient, moving_edge_point};
 use super::crease_shadows::sample_direction;
-use super::subpaths::{CameraVertex, camera_side, radiance_by_depth};
-use super::{finite_splat, run_samples, splat_on_film};
-use crate::film::{Film, SampleSink};
-use crate::integrator::driver::RenderStats;
-use crate::integrator::options::Progress;
-use crate::integrator::path::{PathRecord, TraceCounters};
+use super::source::{BoundarySource, Pass, Scratch};
+use super::subpaths::{camera_side, radiance_by_depth};
+use super::{finite_splat, splat_on_film};
+use crate::film::SampleSink;
+use crate::integrator::path::TraceCounters;
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::Directions;
@@ -57,44 +56,56 @@ pub fn applies(scene: &Scene) -> bool {
     scene.integrator.max_scatter() >= 2 && scene.has_crease_edges()
 }
 
-/// The tear samples `0..samples` into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_crease_tears<S: Directions, F: Film>(
-    scene: &Scene,
-    seed: u64,
-    samples: u64,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    if !applies(scene) {
-        return RenderStats::default();
-    }
-    // Lists (and extracts) the edges only where the term exists.
-    let edges = CreaseEdges::all(scene);
-    if edges.is_empty() {
-        return RenderStats::default();
-    }
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("secondary (crease tears)", progress),
-        (seed, CREASE_TEAR_STREAM),
-        Scratch::default,
-        |scratch, sampler, counters, splats| {
-            sample(scene, &edges, sampler, scratch, splats, counters);
-        },
-    )
+/// The crease edges where paths reach them after a bounce ([`applies`]): eq. (2)'s samples.
+#[derive(Clone, Debug, Default)]
+pub struct CreaseTears {
+    /// Whether the term exists (it takes a share of the samples).
+    applies: bool,
+    edges: CreaseEdges,
 }
 
-/// Buffers reused between samples.
-#[derive(Default)]
-struct Scratch {
-    cams: Vec<CameraVertex>,
-    record: PathRecord,
-    truncated: PathRecord,
-    by_depth: Vec<glam::Vec3>,
+impl CreaseTears {
+    /// The term of `scene`, sampling `edges` (every crease edge of `scene`, [`CreaseEdges::all`]),
+    /// kept only where the term exists.
+    pub fn of(scene: &Scene, edges: &CreaseEdges) -> Self {
+        let applies = applies(scene);
+        Self {
+            applies,
+            edges: if applies {
+                edges.clone()
+            } else {
+                CreaseEdges::default()
+            },
+        }
+    }
+}
+
+impl<S: Directions> BoundarySource<S> for CreaseTears {
+    fn stage(&self) -> &'static str {
+        "secondary (crease tears)"
+    }
+
+    fn stream(&self) -> u64 {
+        CREASE_TEAR_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        self.applies
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        // Edges that extract to nothing take their share but have nothing to sample.
+        if !self.edges.is_empty() {
+            sample(pass.scene, &self.edges, sampler, scratch, sink, counters);
+        }
+    }
 }
 
 /// One sample of eq. (2): pushes its splats (not yet divided by the sample count).
@@ -103,7 +114,7 @@ fn sample<S: Directions>(
     edges: &CreaseEdges,
     sampler: &mut Sampler,
     scratch: &mut Scratch,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
     let Some((pt, m, edge)) = edges.sample_on_surface(scene, sampler) else {

@@ -64,18 +64,16 @@
 //! `L_bg`.
 //!
 //! [`super::primary::render_primary_terms`] shares the primary term's samples equally between the kinds
-//! of curves in view ([`super::primary::PrimarySources::split`]).
+//! of curves in view ([`super::primary::PrimarySources`]).
 
 use super::frustum::Frustum;
+use super::source::{BoundarySource, Pass, Scratch};
 use super::{
     BACKGROUND_OFFSET_PIXELS, attached_first_vertex, background_offset, background_radiance,
-    film_velocity, finite_splat, on_film, projection_jacobian, run_samples, splat_on_film,
+    film_velocity, finite_splat, on_film, projection_jacobian, splat_on_film,
 };
 use crate::emitter::Outline;
-use crate::film::{Film, SampleSink};
-use crate::integrator::attach::SceneAttach;
-use crate::integrator::driver::RenderStats;
-use crate::integrator::options::RenderOptions;
+use crate::film::SampleSink;
 use crate::integrator::path::{PathRecord, TraceCounters, VertexKind};
 use crate::math::Vec3;
 use crate::sampler::Sampler;
@@ -258,44 +256,41 @@ impl EmitterOutlines {
     }
 }
 
-/// The outline samples `0..samples` of eq. (2) into any film (their shares not yet divided
-/// by `samples`).
-pub(crate) fn run_outlines<S: Directions, F: Film>(
-    scene: &Scene,
-    outlines: &EmitterOutlines,
-    render: &RenderOptions,
-    samples: u64,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    if outlines.is_empty() {
-        return RenderStats::default();
+impl<S: Directions> BoundarySource<S> for EmitterOutlines {
+    fn stage(&self) -> &'static str {
+        "primary (emitter outlines)"
     }
-    let attach = SceneAttach::new(scene);
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("primary (emitter outlines)", &render.progress),
-        (render.seed, EDGE_STREAM),
-        PathRecord::default,
-        |record, sampler, counters, splats| {
-            sample(scene, &attach, outlines, sampler, record, splats, counters);
-        },
-    )
+
+    fn stream(&self) -> u64 {
+        EDGE_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        !self.is_empty()
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        sample(pass, self, sampler, &mut scratch.record, sink, counters);
+    }
 }
 
 /// One sample of eq. (2): pushes `(pixel, radiance, coverage)` splats (not yet divided by `N`).
 fn sample<S: Directions>(
-    scene: &Scene,
-    attach: &SceneAttach,
+    pass: &Pass,
     outlines: &EmitterOutlines,
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
+    let (scene, attach) = (pass.scene, &pass.attach);
     let (u0, u1) = (sampler.next_1d(), sampler.next_1d());
     let Some(pt) = outlines.sample([u0, u1]) else {
         return;

@@ -10,7 +10,8 @@
 //! the camera), with [`emitter_edges`] for the outlines of emitters seen directly. Crease edges of sharp
 //! boxes and cylinders: [`crease_edges`] (seen from the camera), [`crease_segment`] (the geometry of a
 //! segment passing an edge), [`crease_shadows`] (their secondary term) and [`crease_tears`] (the tear
-//! of a creased surface's parametrisation at later vertices). Both integrators (`direct` is `path`
+//! of a creased surface's parametrisation at later vertices). Each of those estimators is a
+//! [`source::BoundarySource`], run by the one loop of [`source`]. Both integrators (`direct` is `path`
 //! with one scattering vertex).
 
 pub mod crease_edges;
@@ -22,6 +23,8 @@ mod frustum;
 pub mod primary;
 pub mod secondary;
 pub mod segment;
+pub mod shadow_segment;
+pub mod source;
 pub mod subpaths;
 pub mod tangent_sampling;
 
@@ -31,10 +34,8 @@ pub use segment::{
 };
 
 use crate::camera::CameraFrame;
-use crate::film::{Film, Image, SampleSink, SplatFilm, splat_filtered};
+use crate::film::{SampleSink, splat_filtered};
 use crate::integrator::attach::SceneAttach;
-use crate::integrator::driver::{self, RenderStats};
-use crate::integrator::options::Progress;
 use crate::integrator::path::{
     PathRecord, TraceCounters, VertexKind, contribution, detached, occluded, trace_path,
 };
@@ -42,75 +43,6 @@ use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::{Directions, Scalar};
 use crate::scene::Scene;
-
-/// Boundary samples per parallel work item (results are merged in sample order: deterministic).
-const CHUNK: u64 = 256;
-
-/// Runs boundary samples `0..samples` in parallel chunks on the [`driver`] into `film` (`state()` once
-/// per chunk, `sample(state, sampler, counters, tile)` for sample `k` with the [`Sampler`] of `(seed,
-/// stream)` for index `k`, between the tile's `begin_sample` and `end_sample`). Returns the counts of
-/// the traced rays; `stage` names the work for `progress`.
-pub(crate) fn run_samples<S: Scalar, F: Film, T>(
-    film: &mut F,
-    samples: u64,
-    (stage, progress): (&str, &Progress),
-    (seed, stream): (u64, u64),
-    state: impl Fn() -> T + Sync,
-    sample: impl Fn(&mut T, &mut Sampler, &mut TraceCounters, &mut F::Tile) + Sync,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    if samples == 0 {
-        return RenderStats::default();
-    }
-    let chunks = samples.div_ceil(CHUNK) as usize;
-    driver::run(film, chunks, stage, progress, |c, tile, stats| {
-        let c = c as u64;
-        let mut st = state();
-        let mut counters = TraceCounters::default();
-        for k in c * CHUNK..((c + 1) * CHUNK).min(samples) {
-            let mut sampler = Sampler::new(seed, stream, 0, k);
-            tile.begin_sample();
-            sample(&mut st, &mut sampler, &mut counters, tile);
-            tile.end_sample();
-        }
-        stats.exhausted_rays += counters.exhausted;
-    })
-}
-
-/// Shares `samples` equally between the `kinds` that are present (the first ones get the remainder);
-/// absent kinds, and kinds left with no sample, get no entry.
-pub(crate) fn split_equally<K: Copy>(samples: u64, kinds: &[(K, bool)]) -> Vec<(K, u64)> {
-    let present: Vec<K> = kinds.iter().filter(|k| k.1).map(|k| k.0).collect();
-    let n = present.len() as u64;
-    present
-        .into_iter()
-        .enumerate()
-        .map(|(i, kind)| (kind, samples / n + u64::from((i as u64) < samples % n)))
-        .filter(|&(_, k)| k > 0)
-        .collect()
-}
-
-/// Forward mode: runs `run` (an estimator's [`run_samples`]) on a [`SplatFilm`] of directions
-/// `0..width` of `S` and adds the mean of the splats over `samples` to `radiance[k]` and `coverage[k]`
-/// (the same value in the three channels); sums in `f64` in sample order, whatever the thread count.
-pub(crate) fn accumulate_samples<S: Directions>(
-    scene: &Scene,
-    width: usize,
-    samples: u64,
-    run: impl FnOnce(&mut SplatFilm<S>) -> RenderStats,
-    radiance: &mut [Image],
-    coverage: &mut [Image],
-) -> RenderStats {
-    if samples == 0 {
-        return RenderStats::default();
-    }
-    let mut film = SplatFilm::<S>::new(scene.camera.width, scene.camera.height, width);
-    let stats = run(&mut film);
-    film.add_mean_to(samples, radiance, coverage);
-    stats
-}
 
 /// Whether a film point `(px, py)` (pixels) lies within the filter's reach of some pixel of the image.
 pub(crate) fn on_film(scene: &Scene, px: f32, py: f32) -> bool {
@@ -136,7 +68,7 @@ pub(crate) fn splat_on_film<S: Scalar>(
     (px, py): (f32, f32),
     radiance: Vec3<S>,
     coverage: S,
-    tile: &mut impl SampleSink<S>,
+    tile: &mut dyn SampleSink<S>,
 ) {
     let camera = &scene.camera;
     splat_filtered(

@@ -70,7 +70,7 @@
 //!
 //! Let the parameters move with the background point held: the ray from the lifted eye `c(π)` is
 //! `x(π) = c(π) + |c x_B| d̂(π)` at the depth of `x_B`, with `d̂` the unit direction towards the attached
-//! `x_D(π)` ([`SceneAttach`]), or for a background at infinity the fixed direction `d̂` through the film
+//! `x_D(π)` ([`crate::integrator::attach::SceneAttach`]), or for a background at infinity the fixed direction `d̂` through the film
 //! point `u`, `r (u_x − c_x) − up (u_y − c_y) + f̂ f` normalised, in the primal camera frame. The tangency
 //! residual `h(π) = φ_π(x(π))` (shape parameters lifted too) is 0 at the primal. Moving `u` by `δ n_img`
 //! (or the film point of `x_D` by `δ n_img`: the same change of direction) changes it by
@@ -99,21 +99,21 @@
 //! have no smooth silhouettes), the outlines of finite emitters seen directly
 //! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes) and the crease edges of sharp boxes
 //! and cylinders and of hard CSG ([`super::crease_edges`]); the kinds in view share the samples equally
-//! ([`PrimarySources::split`]). Not included: the creases of hard CSG between unbounded children
+//! ([`PrimarySources`]). Not included: the creases of hard CSG between unbounded children
 //! (listed by [`crate::scene::Scene::unsampled_creases`]), the film edges.
 
-use super::crease_edges::{CreaseEdges, run_creases};
-use super::emitter_edges::{EmitterOutlines, run_outlines};
+use super::crease_edges::{CreaseEdges, CreasesInView};
+use super::emitter_edges::EmitterOutlines;
 use super::segment::is_silhouette_direction;
+use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch, term_images};
 use super::{
-    accumulate_samples, attached_first_vertex, background_offset, background_radiance,
-    finite_splat, on_film, projection_jacobian, run_samples, splat_on_film, split_equally,
+    attached_first_vertex, background_offset, background_radiance, finite_splat, on_film,
+    projection_jacobian, splat_on_film,
 };
 use crate::error::Result;
-use crate::film::{Film, Image, Normalization, SampleSink};
-use crate::integrator::attach::{SceneAttach, for_each_window};
+use crate::film::{Image, Normalization, SampleSink};
 use crate::integrator::driver::RenderStats;
-use crate::integrator::options::{DiffOptions, Progress, RenderOptions, require_continuous_filter};
+use crate::integrator::options::{DiffOptions, require_continuous_filter};
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::silhouette_curve::{
     CurveOptions, SilhouetteCurve, extract_silhouette, silhouette_functions,
@@ -173,57 +173,28 @@ impl PrimaryTerm {
 }
 
 /// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` boundary samples for the whole
-/// image, shared by shape silhouettes, emitter outlines and crease edges ([`PrimarySources::split`]). Errors as
-/// [`render_primary`].
+/// image, shared by shape silhouettes, emitter outlines and crease edges ([`PrimarySources`]), in
+/// passes of the widest dual number `count` needs. Errors as [`render_primary`].
 pub fn render_primary_terms(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,
     samples: u64,
 ) -> Result<PrimaryTerm> {
-    dispatch_directions!(count, render_primary_in(scene, count, options, samples))
-}
-
-/// [`render_primary_terms`] with a chosen scalar type, in passes of `S::COUNT` parameters.
-pub fn render_primary_in<S: Directions>(
-    scene: &Scene,
-    count: usize,
-    options: &DiffOptions,
-    samples: u64,
-) -> Result<PrimaryTerm> {
     require_continuous_filter(scene, "the primary boundary term")?;
-    let mut stats = RenderStats::default();
     if count == 0 {
         return Ok(PrimaryTerm {
             radiance: Vec::new(),
             coverage: Vec::new(),
-            stats,
+            stats: RenderStats::default(),
         });
     }
     let sources = PrimarySources::of(scene)?;
-    let mut radiance = Vec::with_capacity(count);
-    let mut coverage = Vec::with_capacity(count);
-    for (r, c, s) in for_each_window(scene, count, S::COUNT, |windowed, width| {
-        let (w, h) = (windowed.camera.width, windowed.camera.height);
-        let mut r = vec![Image::new(w, h); width];
-        let mut c = vec![Image::new(w, h); width];
-        let mut s = RenderStats::default();
-        for (source, n) in sources.split(samples) {
-            s.absorb(accumulate_samples::<S>(
-                windowed,
-                width,
-                n,
-                |film| sources.run::<S, _>(windowed, source, &options.render, n, film),
-                &mut r,
-                &mut c,
-            ));
-        }
-        (r, c, s)
-    }) {
-        radiance.extend(r);
-        coverage.extend(c);
-        stats.absorb(s);
-    }
+    let render = &options.render;
+    let (radiance, coverage, stats) = dispatch_directions!(
+        count,
+        term_images(scene, count, render, samples, &sources, true)
+    );
     Ok(PrimaryTerm {
         radiance,
         coverage,
@@ -231,140 +202,95 @@ pub fn render_primary_in<S: Directions>(
     })
 }
 
-/// One kind of curve the primary term samples ([`PrimarySources`]).
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum PrimarySource {
-    /// Silhouettes of shapes with curved surfaces ([`silhouettes`]).
-    Silhouettes,
-    /// Outlines of finite emitters seen directly ([`super::emitter_edges`]).
-    EmitterOutlines,
-    /// Crease edges of sharp boxes and cylinders and of hard CSG ([`super::crease_edges`]).
-    CreaseEdges,
-}
-
 /// Everything the primary term samples, found once per render: shape silhouettes, emitter outlines and
-/// crease edges in view.
+/// crease edges in view, which share its samples equally (those with nothing in view take no share).
 #[derive(Clone, Debug)]
 pub struct PrimarySources {
-    /// The silhouette curves, per shape index.
-    pub curves: Vec<(usize, SilhouetteCurve)>,
+    /// The silhouette curves of shapes.
+    pub silhouettes: Silhouettes,
     /// The outlines of emitters in view.
     pub outlines: EmitterOutlines,
     /// The crease edges in view.
-    pub creases: CreaseEdges,
+    pub creases: CreasesInView,
 }
 
 impl PrimarySources {
     /// The curves of `scene` seen from its camera. Errors: a failed silhouette extraction.
     pub fn of(scene: &Scene) -> Result<Self> {
         Ok(Self {
-            curves: silhouettes(scene)?,
+            silhouettes: Silhouettes::of(scene)?,
             outlines: EmitterOutlines::seen_from(scene),
-            creases: CreaseEdges::seen_from(scene),
+            creases: CreasesInView(CreaseEdges::seen_from(scene)),
         })
     }
+}
 
-    /// How `samples` primary samples are shared: equally between the kinds that have curves in view
-    /// (the first ones get the remainder); kinds with none get no entry.
-    pub fn split(&self, samples: u64) -> Vec<(PrimarySource, u64)> {
-        split_equally(
-            samples,
-            &[
-                (PrimarySource::Silhouettes, !self.curves.is_empty()),
-                (PrimarySource::EmitterOutlines, !self.outlines.is_empty()),
-                (PrimarySource::CreaseEdges, !self.creases.is_empty()),
-            ],
-        )
-    }
-
-    /// `samples` samples of one kind into any film (their shares not yet divided by `samples`); the
-    /// seed is `render.seed`.
-    pub(crate) fn run<S: Directions, F: Film>(
-        &self,
-        scene: &Scene,
-        source: PrimarySource,
-        render: &RenderOptions,
-        samples: u64,
-        film: &mut F,
-    ) -> RenderStats
-    where
-        F::Tile: SampleSink<S>,
-    {
-        match source {
-            PrimarySource::Silhouettes => run_curves::<S, F>(
-                scene,
-                &self.curves,
-                render.seed,
-                samples,
-                &render.progress,
-                film,
-            ),
-            PrimarySource::EmitterOutlines => {
-                run_outlines::<S, F>(scene, &self.outlines, render, samples, film)
-            }
-            PrimarySource::CreaseEdges => {
-                run_creases::<S, F>(scene, &self.creases, render, samples, film)
-            }
-        }
+impl BoundaryTerm for PrimarySources {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![&self.silhouettes, &self.outlines, &self.creases]
     }
 }
 
 /// The silhouette curves seen from the camera centre of every shape with finite bounds and curved
-/// surfaces ([`crate::sdf::Sdf::is_piecewise_flat`]; non-empty curves only).
-pub fn silhouettes(scene: &Scene) -> Result<Vec<(usize, SilhouetteCurve)>> {
-    let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
-    let mut curves = Vec::new();
-    for (i, shape) in scene.shapes.iter().enumerate() {
-        let b = shape.bounds;
-        if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() {
-            continue;
+/// surfaces ([`crate::sdf::Sdf::is_piecewise_flat`]; non-empty curves only), per shape index: eq. (2)'s
+/// samples.
+#[derive(Clone, Debug, Default)]
+pub struct Silhouettes(pub Vec<(usize, SilhouetteCurve)>);
+
+impl Silhouettes {
+    /// The silhouettes of `scene`'s shapes seen from its camera. Errors: a failed extraction.
+    pub fn of(scene: &Scene) -> Result<Self> {
+        let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
+        let mut curves = Vec::new();
+        for (i, shape) in scene.shapes.iter().enumerate() {
+            let b = shape.bounds;
+            if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() {
+                continue;
+            }
+            let curve = extract_silhouette(shape, eye, &CurveOptions::default())?;
+            if curve.polyline_length() > 0.0 {
+                curves.push((i, curve));
+            }
         }
-        let curve = extract_silhouette(shape, eye, &CurveOptions::default())?;
-        if curve.polyline_length() > 0.0 {
-            curves.push((i, curve));
-        }
+        Ok(Self(curves))
     }
-    Ok(curves)
 }
 
-/// The silhouette samples `0..samples` into any film (their shares not yet divided by `samples`).
-fn run_curves<S: Directions, F: Film>(
-    scene: &Scene,
-    curves: &[(usize, SilhouetteCurve)],
-    seed: u64,
-    samples: u64,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    if curves.is_empty() {
-        return RenderStats::default();
+impl<S: Directions> BoundarySource<S> for Silhouettes {
+    fn stage(&self) -> &'static str {
+        "primary"
     }
-    let attach = SceneAttach::new(scene);
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("primary", progress),
-        (seed, PRIMARY_STREAM),
-        PathRecord::default,
-        |record, sampler, counters, splats| {
-            sample(scene, &attach, curves, sampler, record, splats, counters);
-        },
-    )
+
+    fn stream(&self) -> u64 {
+        PRIMARY_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        !self.0.is_empty()
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        sample(pass, &self.0, sampler, &mut scratch.record, sink, counters);
+    }
 }
 
 /// One sample of eq. (2): pushes `(pixel, value)` pairs (not yet divided by the sample count).
 fn sample<S: Directions>(
-    scene: &Scene,
-    attach: &SceneAttach,
+    pass: &Pass,
     curves: &[(usize, SilhouetteCurve)],
     sampler: &mut Sampler,
     record: &mut PathRecord,
-    splats: &mut impl SampleSink<S>,
+    splats: &mut dyn SampleSink<S>,
     counters: &mut TraceCounters,
 ) {
+    let (scene, attach) = (pass.scene, &pass.attach);
     let k = curves.len();
     let pick = ((sampler.next_1d() * k as f32) as usize).min(k - 1);
     let (m, curve) = (curves[pick].0, &curves[pick].1);

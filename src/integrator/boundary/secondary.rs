@@ -110,44 +110,37 @@
 //! numbers (the walk draws nothing when it has no bounce to make).
 //!
 //! **Random numbers.** The subpaths of one oriented segment draw from their own stream
-//! ([`SUBPATH_STREAM`]) keyed on the bits of `x_B` and `x_S`: independent of the numbers the boundary
+//! ([`super::shadow_segment::SUBPATH_STREAM`]) keyed on the bits of `x_B` and `x_S`: independent of the numbers the boundary
 //! sample drew (which `x_B` is a function of), deterministic whatever the thread count, and untouched by
 //! changes to how `(x_B, θ_B)` are drawn.
 //!
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
-//! boxes and cylinders and of hard CSG ([`super::crease_shadows`], through `Occluder`); [`split`] shares the samples
-//! between them and the tear of creased surfaces at later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
+//! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, [`super::shadow_segment`], for any
+//! occluder); [`SecondarySources`] shares the samples between them and the tear of creased surfaces at
+//! later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
 //! the creases of hard CSG between unbounded children.
 
-use super::crease_segment::CreaseSegment;
-use super::crease_shadows::run_crease_shadows;
-use super::crease_tears;
-use super::segment::{BoundarySegment, boundary_velocity, is_silhouette_direction};
-use super::subpaths::{camera_side, radiance_by_depth};
+use super::crease_shadows::CreaseShadows;
+use super::crease_tears::CreaseTears;
+use super::segment::is_silhouette_direction;
+use super::shadow_segment::{Occluder, segment};
+use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch, term_images};
 use super::tangent_sampling::{TangentSampler, TangentSampling};
-use super::{accumulate_samples, finite_splat, run_samples, splat_on_film, split_equally};
 use crate::error::Result;
-use crate::film::{Film, Image, SampleSink};
-use crate::integrator::attach::SceneAttach;
-use crate::integrator::attach::for_each_window;
+use crate::film::{Image, SampleSink};
 use crate::integrator::driver::RenderStats;
-use crate::integrator::options::{DiffOptions, Progress, require_continuous_filter};
-use crate::integrator::path::{PathRecord, TraceCounters};
-use crate::integrator::shading::geometry_term;
+use crate::integrator::options::{DiffOptions, require_continuous_filter};
+use crate::integrator::path::TraceCounters;
 use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
-use crate::math::{Ray, Vec3};
+use crate::math::Ray;
 use crate::sampler::Sampler;
-use crate::scalar::{Directions, Scalar, dispatch_directions};
-use crate::scene::{Intersection, Scene, Shape, Surface};
-use crate::sdf::CreaseEdge;
+use crate::scalar::{Directions, dispatch_directions};
+use crate::scene::{Intersection, Scene};
 
 /// The random stream of boundary samples (distinct from the camera's
 /// [`crate::integrator::CAMERA_STREAM`]).
 pub const BOUNDARY_STREAM: u64 = 0x5EC0_4DA2;
-
-/// The random stream of the subpaths (camera-side walk, light-side path) of a segment.
-pub const SUBPATH_STREAM: u64 = 0x5AB_9A7E;
 
 /// The secondary boundary term of the derivative with respect to the parameters in slots `0..count`
 /// (selected with [`Scene::select_parameters`]), estimated with `samples` boundary samples for the whole
@@ -173,28 +166,12 @@ pub fn render_secondary_with(
     samples: u64,
     tangent: TangentSampling,
 ) -> Result<Vec<Image>> {
-    Ok(dispatch_directions!(
-        count,
-        render_secondary_in(scene, count, options, samples, tangent)
-    )?
-    .0)
+    Ok(secondary_term(scene, count, options, samples, tangent)?.0)
 }
 
-/// [`render_secondary`] with the counts of the traced rays.
-pub fn render_secondary_terms(
-    scene: &Scene,
-    count: usize,
-    options: &DiffOptions,
-    samples: u64,
-) -> Result<(Vec<Image>, RenderStats)> {
-    dispatch_directions!(
-        count,
-        render_secondary_in(scene, count, options, samples, TangentSampling::Steered)
-    )
-}
-
-/// [`render_secondary_with`] with a chosen scalar type, in passes of `S::COUNT` parameters.
-pub fn render_secondary_in<S: Directions>(
+/// [`render_secondary_with`] with the counts of the traced rays, in passes of the widest dual number
+/// `count` needs.
+pub(crate) fn secondary_term(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,
@@ -202,97 +179,48 @@ pub fn render_secondary_in<S: Directions>(
     tangent: TangentSampling,
 ) -> Result<(Vec<Image>, RenderStats)> {
     require_continuous_filter(scene, "the secondary boundary term")?;
-    let mut stats = RenderStats::default();
-    let mut images = Vec::with_capacity(count);
     if count == 0 {
-        return Ok((images, stats));
+        return Ok((Vec::new(), RenderStats::default()));
     }
-    let seed = options.render.seed;
-    let progress = &options.render.progress;
-    for (pass_images, pass_stats) in for_each_window(scene, count, S::COUNT, |windowed, width| {
-        pass::<S>(windowed, width, seed, samples, tangent, progress)
-    }) {
-        images.extend(pass_images);
-        stats.absorb(pass_stats);
-    }
+    let sources = SecondarySources::of(scene, tangent);
+    let render = &options.render;
+    let (images, _, stats) = dispatch_directions!(
+        count,
+        term_images(scene, count, render, samples, &sources, false)
+    );
     Ok((images, stats))
 }
 
-/// One pass over all boundary samples: directions `0..width` of `S`.
-fn pass<S: Directions>(
-    scene: &Scene,
-    width: usize,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-) -> (Vec<Image>, RenderStats) {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let mut images = vec![Image::new(w, h); width];
-    let mut stats = RenderStats::default();
-    for (source, n) in split(scene, samples) {
-        stats.absorb(accumulate_samples::<S>(
-            scene,
-            width,
-            n,
-            |film| run_source::<S, _>(scene, source, seed, n, tangent, progress, film),
-            &mut images,
-            &mut [],
-        ));
+/// Everything the secondary term samples, prepared once per render: the tangent lines of smooth
+/// silhouettes (this module), lines past crease edges ([`super::crease_shadows`]) and the tear of
+/// creased surfaces at vertices after the first ([`super::crease_tears`]), which share its samples
+/// equally (those the scene has no occluder for take no share).
+pub struct SecondarySources {
+    /// Tangent lines of curved shapes.
+    pub silhouettes: SilhouetteShadows,
+    /// Lines past crease edges.
+    pub crease_shadows: CreaseShadows,
+    /// The tear of creased surfaces.
+    pub crease_tears: CreaseTears,
+}
+
+impl SecondarySources {
+    /// The occluders of `scene`, tangent angles drawn by `tangent`. The crease edges are listed (and
+    /// extracted) only where a crease term exists.
+    pub fn of(scene: &Scene, tangent: TangentSampling) -> Self {
+        let crease_shadows = CreaseShadows::of(scene);
+        let crease_tears = CreaseTears::of(scene, crease_shadows.edges());
+        Self {
+            silhouettes: SilhouetteShadows::of(scene, tangent),
+            crease_shadows,
+            crease_tears,
+        }
     }
-    (images, stats)
 }
 
-/// One kind of occluder the secondary term samples.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum SecondarySource {
-    /// Smooth silhouettes of curved shapes (tangent lines, this module).
-    Silhouettes,
-    /// Crease edges of sharp boxes and cylinders ([`super::crease_shadows`]).
-    CreaseEdges,
-    /// The tear of creased surfaces' parametrisation at vertices after the first
-    /// ([`super::crease_tears`]; integrators with two or more scattering vertices).
-    CreaseTears,
-}
-
-/// How `samples` secondary samples are shared: equally between the kinds of occluder the scene has.
-pub fn split(scene: &Scene, samples: u64) -> Vec<(SecondarySource, u64)> {
-    split_equally(
-        samples,
-        &[
-            (
-                SecondarySource::Silhouettes,
-                !curved_shapes(scene).is_empty(),
-            ),
-            (SecondarySource::CreaseEdges, scene.has_crease_edges()),
-            (SecondarySource::CreaseTears, crease_tears::applies(scene)),
-        ],
-    )
-}
-
-/// `samples` samples of one kind into any film (their shares not yet divided by `samples`).
-pub(crate) fn run_source<S: Directions, F: Film>(
-    scene: &Scene,
-    source: SecondarySource,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    match source {
-        SecondarySource::Silhouettes => {
-            run_segments::<S, F>(scene, seed, samples, tangent, progress, film)
-        }
-        SecondarySource::CreaseEdges => {
-            run_crease_shadows::<S, F>(scene, seed, samples, progress, film)
-        }
-        SecondarySource::CreaseTears => {
-            crease_tears::run_crease_tears::<S, F>(scene, seed, samples, progress, film)
-        }
+impl BoundaryTerm for SecondarySources {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![&self.silhouettes, &self.crease_shadows, &self.crease_tears]
     }
 }
 
@@ -307,38 +235,8 @@ fn curved_shapes(scene: &Scene) -> Vec<usize> {
         .collect()
 }
 
-/// The boundary samples `0..samples` into any film (their shares not yet divided by `samples`).
-fn run_segments<S: Directions, F: Film>(
-    scene: &Scene,
-    seed: u64,
-    samples: u64,
-    tangent: TangentSampling,
-    progress: &Progress,
-    film: &mut F,
-) -> RenderStats
-where
-    F::Tile: SampleSink<S>,
-{
-    let ctx = Context::new(scene, tangent);
-    if ctx.candidates.is_empty() {
-        return RenderStats::default();
-    }
-    run_samples::<S, F, _>(
-        film,
-        samples,
-        ("secondary", progress),
-        (seed, BOUNDARY_STREAM),
-        Vec::new,
-        |hits, sampler, counters, splats| {
-            ctx.sample(sampler, hits, splats, counters);
-        },
-    )
-}
-
-/// What every boundary sample needs.
-pub(crate) struct Context<'a> {
-    pub(crate) scene: &'a Scene,
-    attach: SceneAttach<'a>,
+/// The tangent lines of smooth silhouettes: eq. (2)'s boundary samples.
+pub struct SilhouetteShadows {
     /// Curved shapes with finite bounds (the ones [`sample_surface`] can sample and whose tangent lines
     /// can be silhouettes), chosen uniformly.
     candidates: Vec<usize>,
@@ -346,121 +244,53 @@ pub(crate) struct Context<'a> {
     tangent: TangentSampler,
 }
 
-/// What blocks a boundary segment at `x_B`.
-#[derive(Copy, Clone, Debug)]
-pub(crate) enum Occluder<'a> {
-    /// A smooth silhouette of shape `m`: the line is tangent there ([`BoundarySegment`]).
-    Silhouette(usize),
-    /// A crease edge of shape `m` (the edge in the shape's coordinates, its unit tangent and its faces'
-    /// gradients at `x_B`): the line passes the edge ([`CreaseSegment`]).
-    Crease(usize, &'a CreaseEdge, glam::Vec3, [glam::Vec3; 2]),
-}
-
-/// A boundary segment's geometry, with what its velocity is evaluated on.
-enum Blocked<'a> {
-    Silhouette(&'a Shape, BoundarySegment),
-    Crease(&'a Shape, &'a CreaseEdge, CreaseSegment),
-}
-
-impl<'a> Occluder<'a> {
-    /// The segment `x_s → x_d` past `x_b` (normals `n_s`, `n_d`); `None` for coincident points or a
-    /// vanishing gradient.
-    fn segment(
-        self,
-        scene: &'a Scene,
-        x_s: glam::Vec3,
-        x_b: glam::Vec3,
-        x_d: glam::Vec3,
-        n_s: glam::Vec3,
-        n_d: glam::Vec3,
-    ) -> Option<Blocked<'a>> {
-        Some(match self {
-            Occluder::Silhouette(m) => {
-                let shape = &scene.shapes[m];
-                let seg = BoundarySegment::from_shape(shape, x_s, x_b, x_d, n_s, n_d)?;
-                Blocked::Silhouette(shape, seg)
-            }
-            Occluder::Crease(m, edge, tangent, grads) => {
-                let shape = &scene.shapes[m];
-                let seg = CreaseSegment::new((x_s, x_b, x_d), n_s, n_d, tangent, grads)?;
-                Blocked::Crease(shape, edge, seg)
-            }
-        })
-    }
-}
-
-impl Blocked<'_> {
-    /// `dA(x_S) dℓ(x_D)` per unit of the sampled measure (eq. (A) of [`super::segment`], (B2) of
-    /// [`super::crease_segment`]).
-    fn jacobian(&self) -> f32 {
-        match self {
-            Blocked::Silhouette(_, seg) => seg.jacobian(),
-            Blocked::Crease(_, _, seg) => seg.jacobian(),
-        }
-    }
-
-    /// The same with `x_D` at infinity.
-    fn jacobian_directional(&self) -> f32 {
-        match self {
-            Blocked::Silhouette(_, seg) => seg.jacobian_directional(),
-            Blocked::Crease(_, _, seg) => seg.jacobian_directional(),
-        }
-    }
-
-    /// `V_∂` by AD with the attached ends.
-    fn velocity<S: Scalar>(&self, x_s: Vec3<S>, x_d: Vec3<S>) -> S {
-        match self {
-            Blocked::Silhouette(shape, seg) => boundary_velocity(shape, seg, x_s, x_d),
-            Blocked::Crease(shape, edge, seg) => seg.velocity(shape, edge, x_s, x_d),
-        }
-    }
-}
-
-/// The end `x_D` of a segment.
-#[derive(Copy, Clone)]
-enum End {
-    /// A point of finite emitter `e` with its normal.
-    Emitter(usize, glam::Vec3, glam::Vec3),
-    /// The environment emitter `e`, at infinity.
-    Environment(usize),
-    /// A point of shape `i` with its normal (where the path scatters again).
-    Shape(usize, glam::Vec3, glam::Vec3),
-}
-
-/// The random numbers of the subpaths of one oriented segment: a stream keyed on the bits of `x_B` and
-/// `x_S` (module docs, "Random numbers").
-fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
-    let bits = |p: glam::Vec3| {
-        (p.x.to_bits() as u64 | (p.y.to_bits() as u64) << 32)
-            ^ (p.z.to_bits() as u64).rotate_left(17)
-    };
-    Sampler::new(bits(x_b), SUBPATH_STREAM, bits(x_s), 0)
-}
-
-impl<'a> Context<'a> {
-    /// The context of `scene`'s boundary samples, `θ_B` drawn by `tangent`.
-    pub(crate) fn new(scene: &'a Scene, tangent: TangentSampling) -> Self {
-        let candidates = curved_shapes(scene);
+impl SilhouetteShadows {
+    /// The curved shapes of `scene`, `θ_B` drawn by `tangent`.
+    pub fn of(scene: &Scene, tangent: TangentSampling) -> Self {
         Self {
-            scene,
-            attach: SceneAttach::new(scene),
-            candidates,
+            candidates: curved_shapes(scene),
             tangent: TangentSampler::new(scene, tangent),
         }
     }
 }
 
-impl Context<'_> {
+impl<S: Directions> BoundarySource<S> for SilhouetteShadows {
+    fn stage(&self) -> &'static str {
+        "secondary"
+    }
+
+    fn stream(&self) -> u64 {
+        BOUNDARY_STREAM
+    }
+
+    fn takes_share(&self) -> bool {
+        !self.candidates.is_empty()
+    }
+
+    fn sample(
+        &self,
+        pass: &Pass,
+        sampler: &mut Sampler,
+        scratch: &mut Scratch,
+        counters: &mut TraceCounters,
+        sink: &mut dyn SampleSink<S>,
+    ) {
+        self.sample_lines(pass, sampler, &mut scratch.hits, sink, counters);
+    }
+}
+
+impl SilhouetteShadows {
     /// One boundary sample: a shape, a line of area samples on it, one tangent angle per hit; pushes the
     /// weighted contributions `(pixel, value)` of eq. (2) (not yet divided by the sample count).
-    fn sample<S: Directions>(
+    fn sample_lines<S: Directions>(
         &self,
+        pass: &Pass,
         sampler: &mut Sampler,
         hits: &mut Vec<SurfaceSample>,
-        splats: &mut impl SampleSink<S>,
+        splats: &mut dyn SampleSink<S>,
         counters: &mut TraceCounters,
     ) {
-        let scene = self.scene;
+        let scene = pass.scene;
         let k = self.candidates.len();
         let pick = ((sampler.next_1d() * k as f32) as usize).min(k - 1);
         let m = self.candidates[pick];
@@ -503,164 +333,8 @@ impl Context<'_> {
                 });
             for (s_end, d_end) in [(&ends[1], &ends[0]), (&ends[0], &ends[1])] {
                 let occluder = Occluder::Silhouette(m);
-                self.segment(occluder, (hit.p, o), s_end, d_end, weight, splats, counters);
-            }
-        }
-    }
-
-    /// The segment from the hit `s_end` past `x_b` (where `occluder` blocks it) to `d_end`, if it is a
-    /// visibility boundary of some camera path: pushes its contributions (eq. (2), with the camera and
-    /// light sides of [`super::subpaths`] for integrators with several scattering vertices).
-    /// `line_origin` is `x_b` pushed off the occluder, where the line was traced from.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn segment<S: Directions>(
-        &self,
-        occluder: Occluder,
-        (x_b, line_origin): (glam::Vec3, glam::Vec3),
-        s_end: &Intersection,
-        d_end: &Intersection,
-        weight: f32,
-        splats: &mut impl SampleSink<S>,
-        counters: &mut TraceCounters,
-    ) {
-        let scene = self.scene;
-        let depth = scene.integrator.max_scatter();
-        let Intersection::Hit(s_hit) = s_end else {
-            return;
-        };
-        let Surface::Shape(si) = s_hit.surface else {
-            return;
-        };
-        let end = match d_end {
-            Intersection::Hit(h) => match h.surface {
-                Surface::Emitter(e) => End::Emitter(e, h.p, h.n),
-                // x_D scatters: the path needs one more scattering vertex than x_S's depth.
-                Surface::Shape(d) if depth >= 2 => End::Shape(d, h.p, h.n),
-                Surface::Shape(_) => return,
-            },
-            Intersection::Miss => match scene.environment {
-                Some(e) => End::Environment(e),
-                None => return,
-            },
-            Intersection::Exhausted => {
-                counters.exhausted += 1;
-                return;
-            }
-        };
-        let (x_s, n_s) = (s_hit.p, s_hit.n);
-        let Some(w) = (x_b - x_s).try_normalize() else {
-            return;
-        };
-        // The subpaths' numbers, keyed on the oriented segment (module docs, "Random numbers").
-        let mut sampler = subpath_sampler(x_b, x_s);
-        let frame = scene.camera.frame::<f32>();
-        let max_k = match end {
-            End::Shape(..) => depth - 1,
-            _ => depth,
-        };
-        let mut cams = Vec::new();
-        camera_side(
-            scene,
-            &frame,
-            si,
-            x_s,
-            n_s,
-            w,
-            max_k,
-            &mut sampler,
-            &mut cams,
-            counters,
-        );
-        if cams.is_empty() {
-            return;
-        }
-        let xs_s = self.attach.shape_vertex::<S>(si, x_s, n_s).x;
-        // Per depth k the radiance arriving at x_S (times G or |cos| at infinity), the measure change J
-        // and V_∂ in S.
-        let mut radiance = Vec::new();
-        let (jac, v) = match end {
-            End::Emitter(e, x_d, n_d) => {
-                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, n_d) else {
-                    return;
-                };
-                let w = (x_b - x_s).normalize_or_zero();
-                let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
-                let le =
-                    scene.emitters[e]
-                        .emitter
-                        .emitted::<f32>(x_d.into(), n_d.into(), (-w).into());
-                let xd_s = self.attach.emitter_vertex::<S>(e, x_d, n_d).x;
-                let v = seg.velocity(xs_s, xd_s);
-                radiance.push((le.primal(), g));
-                (seg.jacobian(), v)
-            }
-            End::Shape(d, x_d, n_d) => {
-                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, n_d) else {
-                    return;
-                };
-                let jac = seg.jacobian();
-                if jac == 0.0 {
-                    return;
-                }
-                let g = geometry_term::<f32>(x_s.into(), n_s.into(), x_d.into(), n_d.into());
-                // The segment's own line (x_S and x_D lie on it; x_B is pushed off M like the traced
-                // line), continued from its first hit x_D.
-                let kmin = cams.iter().map(|c| c.depth).min().unwrap_or(1);
-                let o = line_origin;
-                let Some(w) = (x_d - x_s).try_normalize() else {
-                    return;
-                };
-                let mut by_depth = Vec::new();
-                let (mut record, mut scratch) = (PathRecord::default(), PathRecord::default());
-                if !radiance_by_depth(
-                    scene,
-                    Ray::new(o, w),
-                    d,
-                    depth - kmin,
-                    &mut sampler,
-                    &mut record,
-                    &mut scratch,
-                    &mut by_depth,
-                    counters,
-                ) {
-                    return;
-                }
-                // radiance[k − 1] = (L^{(D−k)}, G) for the depths k the camera side reached.
-                for k in 1..=max_k {
-                    let l = by_depth.get((depth - k) as usize).copied();
-                    radiance.push((l.unwrap_or(glam::Vec3::ZERO), g));
-                }
-                let xd_s = self.attach.shape_vertex::<S>(d, x_d, n_d).x;
-                (jac, seg.velocity(xs_s, xd_s))
-            }
-            End::Environment(e) => {
-                // A stand-in x_D on the plane perpendicular to ω at a distance well beyond x_B.
-                let w = (x_b - x_s).normalize_or_zero();
-                let d = 1e3 * x_s.distance(x_b).max(1.0);
-                let x_d = x_s + w * d;
-                let Some(seg) = occluder.segment(scene, x_s, x_b, x_d, n_s, -w) else {
-                    return;
-                };
-                let le =
-                    scene.emitters[e]
-                        .emitter
-                        .emitted::<f32>(x_d.into(), (-w).into(), (-w).into());
-                let v = seg.velocity(xs_s, Vec3::constant(x_d)) / d;
-                radiance.push((le.primal(), n_s.dot(w).abs()));
-                (seg.jacobian_directional(), v)
-            }
-        };
-        for cam in &cams {
-            // Emitter and environment ends: the same radiance at every depth.
-            let (l, g) = radiance[((cam.depth - 1) as usize).min(radiance.len() - 1)];
-            // Δf = −(camera side · G · radiance) on the clear side (the blocked side is 0).
-            let scale = -(cam.f * l * g) * (jac * weight * cam.j_film);
-            if scale == glam::Vec3::ZERO || !scale.is_finite() {
-                continue;
-            }
-            let value = Vec3::<S>::constant(scale) * v;
-            if finite_splat(&value, S::zero()) {
-                splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
+                let line = (hit.p, o);
+                segment(pass, occluder, line, s_end, d_end, weight, splats, counters);
             }
         }
     }

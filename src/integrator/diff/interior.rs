@@ -45,7 +45,7 @@ use crate::scene::Scene;
 /// The image and the interior term of the derivative with respect to the parameters in slots
 /// `0..count`, with a chosen scalar type `S`, in passes of `S::COUNT` parameters (each pass traces the
 /// same paths). Errors: a discontinuous (box) pixel filter.
-pub fn render_interior_in<S: Directions>(
+pub(crate) fn images<S: Directions>(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,

@@ -9,6 +9,7 @@ pub mod interior;
 
 use crate::error::Result;
 use crate::film::{Channels, Image};
+use crate::integrator::boundary::tangent_sampling::TangentSampling;
 use crate::integrator::boundary::{primary, secondary};
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::DiffOptions;
@@ -63,7 +64,7 @@ pub fn render_interior_in<S: crate::scalar::Directions>(
     options: &DiffOptions,
 ) -> Result<DerivativeImages> {
     let start = std::time::Instant::now();
-    let (image, interior, mut stats) = interior::render_interior_in::<S>(scene, count, options)?;
+    let (image, interior, mut stats) = interior::images::<S>(scene, count, options)?;
     stats.seconds = start.elapsed().as_secs_f64();
     Ok(DerivativeImages {
         image,
@@ -86,8 +87,9 @@ pub fn render_derivatives_with_boundary(
     let start = std::time::Instant::now();
     let mut out = render_interior(scene, count, options)?;
     if secondary_samples > 0 {
+        let steered = TangentSampling::Steered;
         let (images, stats) =
-            secondary::render_secondary_terms(scene, count, options, secondary_samples)?;
+            secondary::secondary_term(scene, count, options, secondary_samples, steered)?;
         out.secondary = images;
         out.stats.absorb(stats);
     }

@@ -25,7 +25,8 @@ pub use loss::Loss;
 use crate::error::{Error, Result};
 use crate::film::{AdjointFilm, Image, Normalization};
 use crate::integrator::boundary::primary::PrimarySources;
-use crate::integrator::boundary::secondary;
+use crate::integrator::boundary::secondary::SecondarySources;
+use crate::integrator::boundary::source::{Pass, run_term};
 use crate::integrator::boundary::tangent_sampling::TangentSampling;
 use crate::integrator::diff::interior;
 use crate::integrator::driver::RenderStats;
@@ -136,7 +137,7 @@ pub fn render_gradient(
         let blank = Image::new(scene.camera.width, scene.camera.height);
         (blank, RenderStats::default())
     });
-    let mut gradient = render_gradient_with_image(scene, layout, adjoint, &image, options)?;
+    let mut gradient = gradient_with_image(scene, layout, adjoint, &image, options)?;
     gradient.stats.absorb(stats);
     Ok(gradient)
 }
@@ -144,7 +145,7 @@ pub fn render_gradient(
 /// [`render_gradient`] with the pixel values `image` in the differentiable normalisation's `∂F − I ∂W`
 /// (ignored with the fixed one): the adjoint pass's own image, or one independent of its samples
 /// (module docs). Errors as [`render_gradient`], and an image of another size.
-pub fn render_gradient_with_image(
+fn gradient_with_image(
     scene: &Scene,
     layout: &GradientLayout,
     adjoint: &Image,
@@ -190,33 +191,37 @@ pub fn render_gradient_with_image(
     stats.absorb(s);
     invalid += interior_film.invalid;
     let (n_primary, n_secondary) = options.boundary.totals(scene, spp);
+    let pass = Pass::new(scene);
     let mut primary = vec![0.0; n];
     if n_primary > 0 {
         let sources = PrimarySources::of(scene)?;
-        for (source, samples) in sources.split(n_primary) {
-            let mut f = film(1.0 / samples as f32);
-            let s = sources.run::<Rev, _>(scene, source, render_options, samples, &mut f);
-            stats.absorb(s);
-            invalid += f.invalid;
-            add(&mut primary, &f.gradient);
-        }
+        stats.absorb(run_term::<Rev, _>(
+            &sources,
+            &pass,
+            n_primary,
+            render_options,
+            |samples| film(1.0 / samples as f32),
+            |f, _| {
+                invalid += f.invalid;
+                add(&mut primary, &f.gradient);
+            },
+        ));
     }
     lap(1);
     let mut secondary = vec![0.0; n];
-    for (source, samples) in secondary::split(scene, n_secondary) {
-        let mut f = film(1.0 / samples as f32);
-        let s = secondary::run_source::<Rev, _>(
-            scene,
-            source,
-            render_options.seed,
-            samples,
-            TangentSampling::Steered,
-            &render_options.progress,
-            &mut f,
-        );
-        stats.absorb(s);
-        invalid += f.invalid;
-        add(&mut secondary, &f.gradient);
+    if n_secondary > 0 {
+        let sources = SecondarySources::of(scene, TangentSampling::Steered);
+        stats.absorb(run_term::<Rev, _>(
+            &sources,
+            &pass,
+            n_secondary,
+            render_options,
+            |samples| film(1.0 / samples as f32),
+            |f, _| {
+                invalid += f.invalid;
+                add(&mut secondary, &f.gradient);
+            },
+        ));
     }
     lap(2);
     stats.invalid_derivatives += invalid;
@@ -263,7 +268,7 @@ pub fn adjoint_seed(seed: u64) -> u64 {
 
 /// The loss of `scene`'s image against `target` and its gradient with respect to the parameters of
 /// `layout`: the loss pass renders with `options.render.seed`, the adjoint pass
-/// ([`render_gradient_with_image`], with the loss pass's image as the pixel values) with
+/// (the same estimators as [`render_gradient`], with the loss pass's image as the pixel values) with
 /// [`adjoint_seed`] of it. Errors: a target of another size, and those of [`render_gradient`].
 pub fn loss_gradient(
     scene: &Scene,
@@ -283,8 +288,7 @@ pub fn loss_gradient(
         },
         ..options.clone()
     };
-    let mut gradient =
-        render_gradient_with_image(scene, layout, &adjoint, &image, &adjoint_options)?;
+    let mut gradient = gradient_with_image(scene, layout, &adjoint, &image, &adjoint_options)?;
     gradient.stats.absorb(loss_stats);
     gradient.stats.seconds = start.elapsed().as_secs_f64();
     Ok(LossGradient {
