@@ -49,7 +49,7 @@ pub use crossing_creases::CrossingCrease;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
-pub use transform::AngleTrig;
+pub use transform::{AngleTrig, Similarity};
 
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
@@ -361,9 +361,10 @@ impl Sdf {
                 axis,
                 angle,
                 scale,
+                trig,
                 child,
-                ..
-            } => transform::bounds(translate, *axis, angle, scale, child),
+            } => Similarity::primal(translate, *axis, angle, *trig, scale)
+                .from_child_box(&child.bounds()),
             Sdf::Grid {
                 data,
                 bbox_min,
