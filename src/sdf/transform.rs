@@ -15,7 +15,7 @@ use crate::scalar::{Param, Param3, Scalar};
 /// Rotate `v` by the angle with cosine `c` and sine `s` about the unit axis `k` (Rodrigues):
 /// `v c + (k × v) s + k (k·v)(1 − c)`. Pass `−s` for the inverse rotation.
 #[inline(always)]
-pub(super) fn rotate<S: Scalar>(v: Vec3<S>, k: glam::Vec3, c: S, s: S) -> Vec3<S> {
+fn rotate<S: Scalar>(v: Vec3<S>, k: glam::Vec3, c: S, s: S) -> Vec3<S> {
     let kxv = Vec3::new(
         v.z * k.y - v.y * k.z,
         v.x * k.z - v.z * k.x,
@@ -442,4 +442,247 @@ pub(super) fn eval<S: Scalar>(
 ) -> S {
     let frame = Similarity::<S>::for_eval(translate, axis, angle, trig, scale);
     frame.from_child_length(child.eval(frame.to_child_point(p)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Dual32;
+
+    /// Transforms with rotations about skew and coordinate axes, small and large scales, and the
+    /// identity, to map across.
+    fn frames() -> Vec<Similarity> {
+        vec![
+            Similarity::new(
+                glam::Vec3::new(1.0, 2.0, -0.5),
+                glam::Vec3::new(1.0, 2.0, 3.0).normalize(),
+                37.0,
+                1.7,
+            ),
+            Similarity::new(glam::Vec3::new(-3.0, 0.25, 4.0), glam::Vec3::Z, -120.0, 0.3),
+            Similarity::new(glam::Vec3::ZERO, glam::Vec3::X, 90.0, 4.0),
+            Similarity::new(glam::Vec3::ZERO, glam::Vec3::Y, 0.0, 1.0),
+        ]
+    }
+
+    /// Points around the origin, on the axes and off them, near and far.
+    fn points() -> Vec<glam::Vec3> {
+        let mut out = vec![glam::Vec3::ZERO];
+        for i in 0..27 {
+            let c = glam::Vec3::new((i % 3) as f32, ((i / 3) % 3) as f32, (i / 9) as f32) - 1.0;
+            out.push(c * 0.7 + glam::Vec3::new(0.1, -0.2, 0.3) * (i as f32 / 9.0));
+        }
+        out.push(glam::Vec3::new(50.0, -20.0, 10.0));
+        out
+    }
+
+    fn close(a: glam::Vec3, b: glam::Vec3, tol: f32) -> bool {
+        (a - b).length() <= tol * (1.0 + a.length().max(b.length()))
+    }
+
+    /// Into the child's frame and back (and back and in) is the identity, for points, directions,
+    /// gradients, lengths and rays; directions and lengths scale alike.
+    #[test]
+    fn round_trips() {
+        for f in frames() {
+            for x in points() {
+                let xs = Vec3::<f32>::from(x);
+                let p: glam::Vec3 = f.to_child_point(xs).into();
+                assert!(
+                    close(f.from_child_point(p.into()).into(), x, 1e-6),
+                    "{f:?} {x}"
+                );
+                let back: glam::Vec3 = f.to_child_point(f.from_child_point(xs)).into();
+                assert!(close(back, x, 1e-6), "{f:?} {x}");
+                let v: glam::Vec3 = f.to_child_vector(xs).into();
+                assert!(close(f.from_child_vector(v.into()).into(), x, 1e-6));
+                assert!((v.length() - x.length() / f.scale()).abs() <= 1e-6 * (1.0 + v.length()));
+                let g: glam::Vec3 = f.to_child_gradient(xs).into();
+                assert!(close(f.from_child_gradient(g.into()).into(), x, 1e-6));
+                assert!((g.length() - x.length()).abs() <= 1e-6 * (1.0 + x.length()));
+                let l = x.length();
+                let back = f.from_child_length(f.to_child_length(l));
+                assert!((back - l).abs() <= 1e-6 * (1.0 + l));
+                assert!((f.to_child_length(l) - v.length()).abs() <= 1e-6 * (1.0 + l));
+                let ray = Ray::new(x, glam::Vec3::new(0.3, -0.8, 0.52).normalize());
+                let local = f.to_child_ray(&ray);
+                let again = f.from_child_ray(&local);
+                assert!(close(again.o, ray.o, 1e-6) && close(again.d, ray.d, 1e-6));
+                // The same parameter on both sides.
+                for t in [-2.0, 0.0, 0.5, 3.0] {
+                    let p: glam::Vec3 = f.to_child_point(ray.at(t).into()).into();
+                    assert!(close(local.at(t), p, 1e-6), "{f:?} {x} {t}");
+                }
+            }
+        }
+    }
+
+    /// A rotation about the `z` axis by 90° and a scale of 2 map as a hand calculation says.
+    #[test]
+    fn maps_by_hand() {
+        let f = Similarity::new(glam::Vec3::new(1.0, 0.0, 0.0), glam::Vec3::Z, 90.0, 2.0);
+        let out: glam::Vec3 = f.from_child_point(Vec3::new(1.0, 0.0, 0.0)).into();
+        assert!(close(out, glam::Vec3::new(1.0, 2.0, 0.0), 1e-6), "{out}");
+        let v: glam::Vec3 = f.to_child_vector(Vec3::new(0.0, 2.0, 0.0)).into();
+        assert!(close(v, glam::Vec3::new(1.0, 0.0, 0.0), 1e-6), "{v}");
+        let g: glam::Vec3 = f.from_child_gradient(Vec3::new(1.0, 0.0, 0.0)).into();
+        assert!(close(g, glam::Vec3::Y, 1e-6), "{g}");
+        assert_eq!(f.from_child_length(0.5), 1.0);
+    }
+
+    /// A mapped box holds its mapped corners and the mapped points inside it, both ways; empty and
+    /// infinite boxes stay so.
+    #[test]
+    fn boxes_hold_their_mapped_points() {
+        let b = Aabb::new(
+            glam::Vec3::new(-0.5, 0.2, -1.0),
+            glam::Vec3::new(0.7, 0.9, 2.0),
+        );
+        for f in frames() {
+            let (out, into) = (f.from_child_box(&b), f.to_child_box(&b));
+            for i in 0..=4 {
+                for j in 0..=4 {
+                    for k in 0..=4 {
+                        let u = glam::Vec3::new(i as f32, j as f32, k as f32) / 4.0;
+                        let p = b.min + (b.max - b.min) * u;
+                        assert!(
+                            out.contains(f.from_child_point(p.into()).into()),
+                            "{f:?} {p}"
+                        );
+                        assert!(
+                            into.contains(f.to_child_point(p.into()).into()),
+                            "{f:?} {p}"
+                        );
+                    }
+                }
+            }
+            // Not much more than the mapped box: a rotation grows a box by at most √3.
+            let grow = |a: &Aabb| a.extent().length();
+            assert!(grow(&out) <= 3f32.sqrt() * f.scale() * grow(&b) * 1.001);
+            assert!(grow(&into) <= 3f32.sqrt() / f.scale() * grow(&b) * 1.001);
+            assert!(f.from_child_box(&Aabb::EMPTY).is_empty());
+            assert!(f.to_child_box(&Aabb::EMPTY).is_empty());
+            let half = Aabb::new(
+                glam::Vec3::splat(-1.0),
+                glam::Vec3::new(1.0, 1.0, f32::INFINITY),
+            );
+            assert_eq!(f.from_child_box(&half), Aabb::INFINITE);
+            assert_eq!(f.to_child_box(&half), Aabb::INFINITE);
+        }
+    }
+
+    /// The matrix form maps as the point map does.
+    #[test]
+    fn affine_form_maps_points() {
+        for f in frames() {
+            let (m, c) = f.to_child_affine();
+            for x in points() {
+                let p: glam::Vec3 = f.to_child_point(x.into()).into();
+                assert!(close(m * x + c, p, 1e-6), "{f:?} {x}");
+            }
+        }
+    }
+
+    /// The gradient of a transformed node is its child's gradient mapped out
+    /// ([`Similarity::from_child_gradient`]) and matches central differences of its value.
+    #[test]
+    fn gradients_map_with_eval() {
+        let child = Sdf::cuboid([0.1, -0.2, 0.3], [0.5, 0.7, 0.9], 0.2);
+        for f in frames() {
+            let node = Sdf::transform(
+                child.clone(),
+                glam::Vec3::from(f.translate),
+                f.axis,
+                angle_of(&f),
+                f.scale(),
+            );
+            for x in points() {
+                let g = node.gradient(x);
+                let p: glam::Vec3 = f.to_child_point(x.into()).into();
+                let mapped: glam::Vec3 = f.from_child_gradient(child.gradient(p).into()).into();
+                assert!(close(g, mapped, 1e-5), "{f:?} {x}: {g} vs {mapped}");
+                let back: glam::Vec3 = f.to_child_gradient(g.into()).into();
+                assert!(close(back, child.gradient(p), 1e-5));
+                let h = 1e-3;
+                let fd = glam::Vec3::from_array(std::array::from_fn(|i| {
+                    let mut e = glam::Vec3::ZERO;
+                    e[i] = h;
+                    (node.eval_f32(x + e) - node.eval_f32(x - e)) / (2.0 * h)
+                }));
+                assert!(close(fd, g, 2e-2), "{f:?} {x}: {fd} vs {g}");
+            }
+        }
+    }
+
+    /// The angle of one of [`frames`], recovered from its cosine and sine.
+    fn angle_of(f: &Similarity) -> f32 {
+        let r = f.rotation.unwrap();
+        r.sin.atan2(r.cos).to_degrees()
+    }
+
+    /// With the angle lifted into a dual number, a mapped point carries its derivative with respect to
+    /// the angle (both ways), which matches central differences.
+    #[test]
+    fn lifted_angle_differentiates_mapped_points() {
+        let (translate, axis) = (
+            Param3::from([0.3, -1.0, 2.0]),
+            glam::Vec3::new(-1.0, 0.5, 2.0).normalize(),
+        );
+        let scale = Param::new(1.3);
+        for degrees in [0.0, 25.0, -140.0] {
+            let angle = Param {
+                value: degrees,
+                slot: Some(0),
+            };
+            let f = Similarity::<Dual32>::lifted(&translate, axis, &angle, &scale);
+            let at = |d: f32| Similarity::new(translate.value(), axis, d, scale.value);
+            let h = 0.05;
+            for x in points() {
+                let xs = Vec3::<Dual32>::constant(x);
+                let into = |d: f32| glam::Vec3::from(at(d).to_child_point(x.into()));
+                let out = |d: f32| glam::Vec3::from(at(d).from_child_point(x.into()));
+                let maps: [(Vec3<Dual32>, &dyn Fn(f32) -> glam::Vec3); 2] = [
+                    (f.to_child_point(xs), &into),
+                    (f.from_child_point(xs), &out),
+                ];
+                for (mapped, primal) in maps {
+                    let derivative = glam::Vec3::new(mapped.x.eps, mapped.y.eps, mapped.z.eps);
+                    let fd = (primal(degrees + h) - primal(degrees - h)) / (2.0 * h);
+                    assert!(
+                        close(derivative, fd, 2e-3),
+                        "{degrees} {x}: {derivative} vs {fd}"
+                    );
+                    assert!(close(mapped.primal(), primal(degrees), 1e-6));
+                }
+            }
+        }
+    }
+
+    /// The primal frame with the node's kept cosine and sine maps bit for bit as the frame lifted into
+    /// `f32` (computing them afresh), and a stale [`AngleTrig`] is not used.
+    #[test]
+    fn kept_trig_is_exact_and_never_stale() {
+        let (translate, scale) = (Param3::from([0.3, -1.0, 2.0]), Param::new(0.7));
+        let axis = glam::Vec3::new(2.0, -1.0, 0.5).normalize();
+        for degrees in [0.0, 1e-3, 17.5, 90.0, -33.3, 179.9, 360.0, 1234.5] {
+            let angle = Param::new(degrees);
+            let kept = Similarity::primal(&translate, axis, &angle, AngleTrig::of(degrees), &scale);
+            let stale = Similarity::primal(
+                &translate,
+                axis,
+                &angle,
+                AngleTrig::of(degrees + 1.0),
+                &scale,
+            );
+            let lifted = Similarity::<f32>::lifted(&translate, axis, &angle, &scale);
+            assert_eq!(kept, lifted);
+            assert_eq!(stale, lifted);
+            let (s, c) = degrees.to_radians().sin_cos();
+            let r = kept.rotation.unwrap();
+            assert_eq!(
+                (r.cos.to_bits(), r.sin.to_bits()),
+                (c.to_bits(), s.to_bits())
+            );
+        }
+    }
 }
