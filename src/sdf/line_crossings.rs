@@ -23,7 +23,7 @@
 //!   the flat part of the caps (`ρ ≤ R − rounding`) and the straight part of the side
 //!   (`|h| ≤ H − rounding`); a crossing elsewhere is inexact;
 //! - **transform** `x = T + s R p`: the line mapped into the child's frame (`o' = R⁻¹(o − T)/s`,
-//!   `d' = R⁻¹ d / s`: the same parameter `t`).
+//!   `d' = R⁻¹ d / s`: the same parameter `t`; [`super::Similarity::to_child_ray`]).
 
 use super::{Sdf, Similarity};
 use crate::math::Ray;

@@ -446,7 +446,6 @@ impl Sdf {
                 csg::max_lipschitz(children)
             }
             Sdf::SmoothUnion { children, .. } => csg::max_lipschitz(children),
-            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.lipschitz(),
             _ => 1.0,
         }
     }

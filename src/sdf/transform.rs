@@ -639,13 +639,16 @@ mod tests {
             let h = 0.05;
             for x in points() {
                 let xs = Vec3::<Dual32>::constant(x);
-                let into = |d: f32| glam::Vec3::from(at(d).to_child_point(x.into()));
-                let out = |d: f32| glam::Vec3::from(at(d).from_child_point(x.into()));
-                let maps: [(Vec3<Dual32>, &dyn Fn(f32) -> glam::Vec3); 2] = [
-                    (f.to_child_point(xs), &into),
-                    (f.from_child_point(xs), &out),
-                ];
-                for (mapped, primal) in maps {
+                for into in [true, false] {
+                    let map = |f: Similarity<Dual32>| {
+                        if into {
+                            f.to_child_point(xs)
+                        } else {
+                            f.from_child_point(xs)
+                        }
+                    };
+                    let mapped = map(f);
+                    let primal = |d: f32| map(at(d).constant()).primal();
                     let derivative = glam::Vec3::new(mapped.x.eps, mapped.y.eps, mapped.z.eps);
                     let fd = (primal(degrees + h) - primal(degrees - h)) / (2.0 * h);
                     assert!(
