@@ -15,8 +15,7 @@
 //! its surface move differently and meet along creases or blends, where a carried field would tear;
 //! such trees keep the normal field ([`Sdf::carried`] returns `None`).
 
-use super::Sdf;
-use super::transform::rotate;
+use super::{Sdf, Similarity};
 use crate::math::Vec3;
 use crate::scalar::{Param, Param3, Scalar};
 
@@ -86,23 +85,15 @@ impl Sdf {
                 axis,
                 angle,
                 scale,
+                trig,
                 child,
-                ..
             } => {
                 // Into the child's frame with the primal transform, carried there, and back out with
                 // the lifted one.
-                let (s, c) = angle.value.to_radians().sin_cos();
-                let local = rotate(
-                    q - Vec3::constant(translate.value()),
-                    *axis,
-                    S::constant(c),
-                    S::constant(-s),
-                ) * S::constant(scale.value.recip());
-                let moved = child.carried(local)?;
-                let theta = angle.get::<S>() * (std::f32::consts::PI / 180.0);
+                let primal = Similarity::primal(translate, *axis, angle, *trig, scale);
+                let moved = child.carried(primal.constant::<S>().to_child_point(q))?;
                 Some(
-                    translate.get::<S>()
-                        + rotate(moved, *axis, theta.cos(), theta.sin()) * scale.get::<S>(),
+                    Similarity::<S>::lifted(translate, *axis, angle, scale).from_child_point(moved),
                 )
             }
             Sdf::Named { child, .. } => child.carried(q),

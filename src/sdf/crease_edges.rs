@@ -16,7 +16,7 @@
 //! chords of their extracted curves ([`super::CrossingCrease`], faces [`Face::Child`]).
 
 use super::creases::crossing_pairs;
-use super::{CrossingCrease, Sdf, transform};
+use super::{CrossingCrease, Sdf, Similarity};
 use crate::math::implicit_curve::CurveOptions;
 use crate::math::{Aabb, Vec3};
 use crate::scalar::Scalar;
@@ -125,25 +125,22 @@ pub struct CreaseEdge {
     pub inverted: bool,
 }
 
-/// A similarity `x ↦ t + s R x` accumulated from the transforms above a node, applied innermost first.
+/// The similarities of the transforms above a node, outermost first: `x ↦ t + s R x` applied
+/// innermost first.
 #[derive(Clone, Debug, Default)]
-struct Placement(Vec<(glam::Vec3, glam::Vec3, f32, f32, f32)>);
+struct Placement(Vec<Similarity>);
 
 impl Placement {
     fn point(&self, p: glam::Vec3) -> glam::Vec3 {
-        self.0.iter().rev().fold(p, |p, &(t, axis, c, s, scale)| {
-            t + glam::Vec3::from(transform::rotate(Vec3::<f32>::from(p), axis, c, s)) * scale
-        })
+        (self.0.iter().rev()).fold(p, |p, frame| frame.from_child_point(p.into()).into())
     }
 
     fn vector(&self, v: glam::Vec3) -> glam::Vec3 {
-        self.0.iter().rev().fold(v, |v, &(_, axis, c, s, scale)| {
-            glam::Vec3::from(transform::rotate(Vec3::<f32>::from(v), axis, c, s)) * scale
-        })
+        (self.0.iter().rev()).fold(v, |v, frame| frame.from_child_vector(v.into()).into())
     }
 
     fn scale(&self) -> f32 {
-        self.0.iter().map(|&(.., scale)| scale).product()
+        self.0.iter().map(Similarity::scale).product()
     }
 }
 
@@ -197,11 +194,9 @@ impl Sdf {
                 },
                 _,
             ) => {
-                let theta = angle.get::<S>() * (std::f32::consts::PI / 180.0);
-                let q =
-                    transform::rotate(p - translate.get::<S>(), *axis, theta.cos(), -theta.sin());
+                let frame = Similarity::<S>::lifted(translate, *axis, angle, scale);
                 // The zero set is what matters: the child's value is not rescaled.
-                child.face_value(path, face, q * scale.get::<S>().recip())
+                child.face_value(path, face, frame.to_child_point(p))
             }
             (
                 Sdf::Union(children)
@@ -299,13 +294,10 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
             axis,
             angle,
             scale,
+            trig,
             child,
-            ..
         } => {
-            let (s, c) = angle.value.to_radians().sin_cos();
-            walk.place
-                .0
-                .push((translate.value(), *axis, c, s, scale.value));
+            (walk.place.0).push(Similarity::primal(translate, *axis, angle, *trig, scale));
             collect(child, walk, out);
             walk.place.0.pop();
         }

@@ -14,8 +14,8 @@
 //! whenever the spline stays above the level on the box's faces; otherwise no skipping). Parameters that
 //! change the grid, its level or its transforms rebuild it with the shape.
 
-use super::{Sdf, grid, transform};
-use crate::math::{Ray, Vec3};
+use super::{Sdf, Similarity, grid};
+use crate::math::Ray;
 use std::cmp::Ordering;
 
 /// The chessboard distance map of a grid shape's straddling cells, and the map from the shape's frame to
@@ -68,29 +68,20 @@ impl EmptySpace {
                 axis,
                 angle,
                 scale,
+                trig,
                 child,
-                ..
             } => {
                 let inner = Self::of(child)?;
-                // p_child = R⁻¹ (x − t) / s.
-                let (sin, cos) = angle.value.to_radians().sin_cos();
-                let inverse = |v: glam::Vec3| -> glam::Vec3 {
-                    transform::rotate(Vec3::<f32>::from(v), *axis, cos, -sin).into()
-                };
-                let s = scale.value;
+                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
+                let s = frame.scale();
                 if !(s > 0.0 && s.is_finite()) {
                     return None;
                 }
-                let rotation = glam::Mat3::from_cols(
-                    inverse(glam::Vec3::X),
-                    inverse(glam::Vec3::Y),
-                    inverse(glam::Vec3::Z),
-                ) * (1.0 / s);
-                let child_offset = -(rotation * translate.value());
+                let (to_child, child_offset) = frame.to_child_affine();
                 Some(Self {
-                    to_lattice: inner.to_lattice * rotation,
+                    to_lattice: inner.to_lattice * to_child,
                     offset: inner.to_lattice * child_offset + inner.offset,
-                    cell_size: inner.cell_size * s,
+                    cell_size: frame.from_child_length(inner.cell_size),
                     ..inner
                 })
             }

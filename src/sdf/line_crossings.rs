@@ -23,10 +23,10 @@
 //!   the flat part of the caps (`ρ ≤ R − rounding`) and the straight part of the side
 //!   (`|h| ≤ H − rounding`); a crossing elsewhere is inexact;
 //! - **transform** `x = T + s R p`: the line mapped into the child's frame (`o' = R⁻¹(o − T)/s`,
-//!   `d' = R⁻¹ d / s`: the same parameter `t`).
+//!   `d' = R⁻¹ d / s`: the same parameter `t`; [`super::Similarity::to_child_ray`]).
 
-use super::{Sdf, transform};
-use crate::math::{Ray, Vec3};
+use super::{Sdf, Similarity};
+use crate::math::Ray;
 
 /// The crossings of a whole line `o + t d` (`t ∈ ℝ`) with a surface.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -102,17 +102,11 @@ impl Sdf {
                 axis,
                 angle,
                 scale,
+                trig,
                 child,
-                ..
             } => {
-                let s = scale.value;
-                let (sin, cos) = angle.value.to_radians().sin_cos();
-                let local = |v: glam::Vec3| -> glam::Vec3 {
-                    transform::rotate(Vec3::<f32>::from(v), *axis, cos, -sin).into()
-                };
-                // `p = R⁻¹(x − T)/s` maps `o + t d` to `o' + t d'` with `d' = R⁻¹ d / s`: the same `t`.
-                let ray_local = Ray::new(local(o - translate.value()) / s, local(d) / s);
-                child.line_crossings(&ray_local)?
+                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
+                child.line_crossings(&frame.to_child_ray(ray))?
             }
             Sdf::Cylinder {
                 center,

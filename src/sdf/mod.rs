@@ -51,7 +51,7 @@ pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use npy::{read_npy, write_npy};
 pub use primitive::SdfPrimitive;
-pub use transform::AngleTrig;
+pub use transform::{AngleTrig, Similarity};
 
 // The primitives kept in files of their own: one line each ([`primitive`]).
 primitive::primitives! {
@@ -424,9 +424,10 @@ impl Sdf {
                 axis,
                 angle,
                 scale,
+                trig,
                 child,
-                ..
-            } => transform::bounds(translate, *axis, angle, scale, child),
+            } => Similarity::primal(translate, *axis, angle, *trig, scale)
+                .from_child_box(&child.bounds()),
             Sdf::Grid {
                 data,
                 bbox_min,
@@ -508,7 +509,6 @@ impl Sdf {
                 csg::max_lipschitz(children)
             }
             Sdf::SmoothUnion { children, .. } => csg::max_lipschitz(children),
-            Sdf::Transform { child, .. } | Sdf::Named { child, .. } => child.lipschitz(),
             _ => 1.0,
         }
     }
