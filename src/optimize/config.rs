@@ -7,9 +7,11 @@
 
 use super::{Settings, Terms, View, orbit};
 use crate::error::{Error, Result};
-use crate::film::{Image, read_exr_rgb};
+use crate::film::Image;
 use crate::integrator::Loss;
-use crate::scene::json::{Obj, StrictValue, describe, number};
+use crate::io::json::StrictValue;
+use crate::io::read_exr_rgb;
+use crate::scene::json::{Obj, describe, number};
 use crate::scene::{self, Scene};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
