@@ -1,5 +1,6 @@
 //! File formats, in one place: OpenEXR ([`exr`]) and PNG ([`png`]) images, NumPy `.npy` grids
-//! ([`npy`]), strict JSON ([`json`]), and output files written whole or not at all ([`files`]).
+//! ([`npy`]), JSON read strictly (`json`: the base of the scene and `OPT.json` readers), and output
+//! files written whole or not at all ([`files`]).
 //!
 //! Rendering types never see a file: the scene reader, the film and the grids call these at the edge.
 
