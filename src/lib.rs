@@ -43,6 +43,7 @@ pub mod emitter;
 pub mod error;
 pub mod film;
 pub mod integrator;
+pub mod io;
 pub mod math;
 pub mod optimize;
 #[cfg(feature = "python")]

@@ -281,3 +281,65 @@ fn bake_then_render_grid() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Runs the tool with `args` in `dir`, stdout a pipe whose reader takes `lines` lines (none: it is
+/// closed at once) and goes away; returns the exit status and stderr.
+fn run_with_reader_gone(
+    dir: &std::path::Path,
+    args: &[&str],
+    lines: usize,
+) -> (std::process::ExitStatus, String) {
+    use std::io::BufRead;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(common::BIN)
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run implicit-psdr");
+    let mut reader = std::io::BufReader::new(child.stdout.take().unwrap());
+    for _ in 0..lines {
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        assert!(!line.is_empty(), "stdout ended early");
+    }
+    drop(reader);
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_reader_that_goes_away_ends_the_report_quietly() {
+    let dir = workdir("broken-pipe");
+    // `params` of 3000 spheres: about 30,000 lines, far more than a pipe holds (64 KiB), so the tool
+    // is still writing when the reader leaves after one line (`| head -1`).
+    let text = scene(|v| {
+        let ball = v["shapes"][0].clone();
+        v["shapes"] = (0..3000)
+            .map(|i| {
+                let mut b = ball.clone();
+                b["name"] = format!("ball{i}").into();
+                b
+            })
+            .collect();
+    });
+    std::fs::write(dir.join("scene.json"), text).unwrap();
+    let (status, stderr) = run_with_reader_gone(&dir, &["params", "scene.json"], 1);
+    assert!(status.success(), "{status}; stderr: {stderr}");
+    assert_eq!(stderr, "", "params");
+    // A command that reports after its work: the reader is gone before it prints; the files are
+    // written all the same.
+    std::fs::write(dir.join("small.json"), scene(|_| {})).unwrap();
+    let (status, stderr) = run_with_reader_gone(&dir, &["render", "small.json"], 0);
+    assert!(status.success(), "{status}; stderr: {stderr}");
+    assert_eq!(stderr, "", "render");
+    assert_eq!(
+        outputs(&dir, &["scene.json", "small.json"]),
+        ["out.exr", "out.png"]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

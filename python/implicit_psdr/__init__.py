@@ -10,6 +10,9 @@ seed 0, the differentiable pixel normalisation, the default boundary budgets):
   the ``diff`` command's EXR channels (``"image"``, ``"d.P"``, ...);
 - ``grad(scene, target=..., params=[...], grids=[...])`` or ``grad(scene, adjoint=...)``: a loss and
   its gradient in reverse mode, ``(loss, {name: float | array})``;
+- ``optimize(config, out=None, base_dir=None)``: the run of an ``OPT.json`` (a path or a dict), as the
+  ``optimize`` command; returns the rows of its ``progress.csv``, one dict per iteration, and writes
+  the command's files in ``out`` if given;
 - ``read_exr(path)``: the channels of an EXR the tool wrote.
 
 Arrays are numpy float32: images (height, width, 3) with row 0 at the top, grids (nz, ny, nx).
@@ -18,6 +21,6 @@ message; malformed arrays raise ``ValueError``. ``implicit_psdr.torch`` wraps a 
 ``torch.autograd.Function``; ``implicit_psdr.ray`` sums gradients over many views as Ray tasks.
 """
 
-from ._native import Scene, SceneError, diff, grad, read_exr, render
+from ._native import Scene, SceneError, diff, grad, optimize, read_exr, render
 
-__all__ = ["Scene", "SceneError", "diff", "grad", "read_exr", "render"]
+__all__ = ["Scene", "SceneError", "diff", "grad", "optimize", "read_exr", "render"]

@@ -1,15 +1,16 @@
-//! Pixel filters, images and their output (EXR, PNG).
+//! Pixel filters, accumulation and images, and the colour maps of the derivative pictures; the image
+//! files themselves (EXR, PNG) are [`crate::io`]'s.
 
 pub mod accumulate;
 mod adjoint;
 pub mod colormap;
 mod filter;
-mod output;
 
 pub use accumulate::{Film, Normalization, PixelFilm, SampleSink, SplatFilm, splat_filtered};
 pub use adjoint::{AdjointFilm, AdjointTile};
 pub use filter::{Filter, Footprint};
-pub use output::{
+// The image files' old home, kept for the paths users and the integrators name.
+pub use crate::io::{
     Channels, check_output_path, read_exr, read_exr_rgb, rgb_from_channels, srgb_encode, write_exr,
     write_exr_and_png, write_png,
 };

@@ -7,9 +7,11 @@
 
 use super::{Settings, Terms, View, orbit};
 use crate::error::{Error, Result};
-use crate::film::{Image, read_exr_rgb};
+use crate::film::Image;
 use crate::integrator::Loss;
-use crate::scene::json::{Obj, StrictValue, describe, number};
+use crate::io::json::StrictValue;
+use crate::io::read_exr_rgb;
+use crate::scene::json::{Obj, describe, number};
 use crate::scene::{self, Scene};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -97,24 +99,31 @@ impl OptimizeConfig {
         let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, e))?;
         // A bare file name has the empty parent: names resolve against the current folder as given.
         let base_dir = path.parent().unwrap_or(Path::new(""));
-        parse(&text, base_dir, path).map_err(|e| match e {
-            Error::Field { field, message } => Error::file(path, format!("{field}: {message}")),
+        let StrictValue(root) = serde_json::from_str(&text).map_err(|e| Error::file(path, e))?;
+        Self::from_value(&root, base_dir, path)
+    }
+
+    /// Checks the document of an `OPT.json` that is not a file (a Python dict, say): its file names
+    /// resolve against `base_dir`, and `name` stands for the file in errors (`name: iterations: must
+    /// be >= 1, got 0`) and as [`OptimizeConfig::path`].
+    pub fn from_value(root: &Value, base_dir: &Path, name: &Path) -> Result<Self> {
+        parse(root, base_dir, name).map_err(|e| match e {
+            Error::Field { field, message } => Error::file(name, format!("{field}: {message}")),
             e => e,
         })
     }
 }
 
-/// Parses `OPT.json` (`text`, read from `path`, whose folder is `base_dir`). Errors about its own
-/// fields are field errors; errors inside a scene or an image name that file.
-fn parse(text: &str, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
-    let StrictValue(root) = serde_json::from_str(text).map_err(|e| Error::file(path, e))?;
+/// Parses the document `root` of `OPT.json` (read from `path`, whose folder is `base_dir`). Errors
+/// about its own fields are field errors; errors inside a scene or an image name that file.
+fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
     if !root.is_object() {
         return Err(Error::file(
             path,
-            format!("expected a JSON object, got {}", describe(&root)),
+            format!("expected a JSON object, got {}", describe(root)),
         ));
     }
-    let o = Obj::new(&root, String::new(), FIELDS)?;
+    let o = Obj::new(root, String::new(), FIELDS)?;
     o.opt_string("description")?;
     for key in ["scene", "target", "views", "optimize", "iterations"] {
         o.req(key)?;

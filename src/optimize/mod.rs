@@ -5,13 +5,23 @@
 //! the loss pass and the adjoint pass at the view's camera, the mean loss and the mean gradient over
 //! those views, one Adam step per parameter (grid values and named parameters with their own learning
 //! rates), then every value is brought back into its valid range ([`Optimization::step`]).
+//!
+//! A whole run as an `OPT.json` describes it ([`config`]), with its files (`progress.csv`, the
+//! pictures, the target cache, `result.json`), is [`run()`]'s, which the `optimize` command and
+//! `implicit_psdr.optimize` call.
 
 mod adam;
 pub mod config;
 pub mod metrics;
+pub mod pictures;
+pub mod progress;
+pub mod run;
+pub mod targets;
 mod views;
 
 pub use adam::Adam;
+pub use progress::Row;
+pub use run::{Observer, Outcome, Status, run};
 pub use views::{View, orbit};
 
 use crate::error::{Error, Result};
@@ -381,19 +391,13 @@ const VIEW_STREAM: u64 = 0x71E5_0F17;
 
 /// The target images of `views` rendered from `scene` at `spp` samples per pixel, seeds `seed + k`.
 pub fn render_targets(scene: &Scene, views: &[View], spp: u32, seed: u64) -> Result<Vec<Image>> {
-    views
-        .iter()
-        .enumerate()
-        .map(|(k, v)| {
-            let s = v.apply(scene)?;
-            let options = RenderOptions {
-                spp,
-                seed: seed.wrapping_add(k as u64),
-                ..RenderOptions::default()
-            };
-            Ok(render(&s, &options).0)
-        })
-        .collect()
+    targets::render_targets_with(
+        scene,
+        views,
+        spp,
+        seed,
+        &crate::integrator::Progress::default,
+    )
 }
 
 /// The smoothness term `λ · mean_i (Δc)_i²` over the interior nodes of `data` (`Δ` the 7-point

@@ -10,6 +10,7 @@
 
 mod arrays;
 mod grad;
+mod optimize;
 mod render;
 mod scene;
 
@@ -63,7 +64,7 @@ pub(crate) fn run_detached<T: Send>(
     })
 }
 
-/// The extension module: the `Scene` class, `render`, `diff`, `grad` and `read_exr`.
+/// The extension module: the `Scene` class, `render`, `diff`, `grad`, `optimize` and `read_exr`.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
@@ -72,6 +73,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::diff, m)?)?;
     m.add_function(wrap_pyfunction!(grad::grad, m)?)?;
+    m.add_function(wrap_pyfunction!(optimize::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::read_exr, m)?)?;
     m.add("DEFAULT_SEED", 0u64)?;
     Ok(())

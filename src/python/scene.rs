@@ -50,7 +50,7 @@ impl PyScene {
     #[staticmethod]
     #[pyo3(signature = (scene, base_dir = None))]
     fn from_dict(scene: &Bound<'_, PyAny>, base_dir: Option<PathBuf>) -> PyResult<Self> {
-        let doc = to_json(scene, "").map_err(scene_error)?;
+        let doc = to_json(scene, "scene").map_err(scene_error)?;
         let base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
         Self::parse(doc, &base_dir).map_err(scene_error)
     }
@@ -215,10 +215,16 @@ fn in_file(path: &Path, e: crate::Error) -> crate::Error {
     }
 }
 
-/// A Python value of a scene dict as JSON, or an error naming its field (`shapes[0].sdf.radius`):
-/// dicts with string keys, lists and tuples, strings, booleans, integers, finite floats and `None`.
-fn to_json(value: &Bound<'_, PyAny>, path: &str) -> crate::Result<Value> {
-    let field = || if path.is_empty() { "scene" } else { path };
+/// A Python dict of a JSON file's structure (a scene, an `OPT.json`) as JSON, or an error naming its
+/// field (`shapes[0].sdf.radius`; the dict itself is `root`): dicts with string keys, lists and
+/// tuples, strings, booleans, integers, finite floats and `None`.
+pub(crate) fn to_json(value: &Bound<'_, PyAny>, root: &str) -> crate::Result<Value> {
+    json_at(value, "", root)
+}
+
+/// [`to_json`] of the value at field `path` (`""`: the root, named `root`).
+fn json_at(value: &Bound<'_, PyAny>, path: &str, root: &str) -> crate::Result<Value> {
+    let field = || if path.is_empty() { root } else { path };
     let wrong = |what: String| crate::Error::field(field(), what);
     // bool is a subclass of int in Python: test it first.
     if value.is_instance_of::<PyBool>() {
@@ -253,7 +259,7 @@ fn to_json(value: &Bound<'_, PyAny>, path: &str) -> crate::Result<Value> {
             } else {
                 format!("{path}.{key}")
             };
-            map.insert(key, to_json(&v, &inner)?);
+            map.insert(key, json_at(&v, &inner, root)?);
         }
         return Ok(Value::Object(map));
     }
@@ -263,7 +269,7 @@ fn to_json(value: &Bound<'_, PyAny>, path: &str) -> crate::Result<Value> {
             .and_then(|i| i.collect())
             .map_err(|e| wrong(e.to_string()))?;
         let items = (items.iter().enumerate())
-            .map(|(i, v)| to_json(v, &format!("{}[{i}]", field())))
+            .map(|(i, v)| json_at(v, &format!("{}[{i}]", field()), root))
             .collect::<crate::Result<_>>()?;
         return Ok(Value::Array(items));
     }
@@ -273,7 +279,7 @@ fn to_json(value: &Bound<'_, PyAny>, path: &str) -> crate::Result<Value> {
         && let Ok(list) = value.call_method0("tolist")
         && !list.is(value)
     {
-        return to_json(&list, path);
+        return json_at(&list, path, root);
     }
     // numpy scalars and other numbers: their float value.
     if let Ok(x) = value.extract::<f64>() {

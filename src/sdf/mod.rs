@@ -8,8 +8,8 @@
 //! `Dual32`.
 //!
 //! Layout: exact-distance primitives (`primitives.rs`), hard CSG and the cubic smooth union (`csg.rs`),
-//! similarity transforms (`transform.rs`), B-spline grids (`grid.rs`), `.npy` I/O (`npy.rs`) and baking
-//! any node onto a grid (`bake.rs`); interval enclosures of `φ` and `∇φ` over boxes (`interval/`, used for
+//! similarity transforms (`transform.rs`), B-spline grids (`grid.rs`; their `.npy` files are
+//! [`crate::io::npy`]'s) and baking any node onto a grid (`bake.rs`); interval enclosures of `φ` and `∇φ` over boxes (`interval/`, used for
 //! certified culling). [`Sdf::Named`] only carries a node's name from the scene file (for
 //! parameter names) and delegates everything to its child.
 //!
@@ -37,19 +37,18 @@ mod grid;
 mod grid_edit;
 pub mod interval;
 mod line_crossings;
-mod npy;
 mod primitive;
 mod primitives;
 mod transform;
 mod validate;
 
+pub use crate::io::npy::{read_npy, write_npy};
 pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
 pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
 pub use crossing_creases::CrossingCrease;
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
-pub use npy::{read_npy, write_npy};
 pub use primitive::SdfPrimitive;
 pub use transform::{AngleTrig, Similarity};
 

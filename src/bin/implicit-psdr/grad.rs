@@ -1,68 +1,21 @@
-//! The `grad` command (the loss of the image against a target and its reverse-mode gradient), and the
-//! grid-value blocks that `params` lists and `diff --grid-direction` selects.
+//! The `grad` command: the loss of the image against a target and its reverse-mode gradient, written
+//! as grad.json and one `.npy` per grid.
 
 use crate::args::GradArgs;
 use crate::{diff_options, in_file, prepare, warn};
-use anyhow::{Context, Result, bail};
-use implicit_psdr::film::{self, Image};
+use anyhow::{Result, bail};
+use implicit_psdr::film::Image;
 use implicit_psdr::integrator::diff::terms_note;
 use implicit_psdr::integrator::{GradientLayout, loss_gradient};
-use implicit_psdr::scene::{GridBlock, GridDirection, ParameterEntry, Scene};
-use implicit_psdr::sdf::{self, GridData};
+use implicit_psdr::io::{self, Writer, file_message, file_name};
+use implicit_psdr::scene::GridBlock;
+use implicit_psdr::sdf::GridData;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-
-/// What `params` prints: every parameter as `name value`, and each grid node's values once, as
-/// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end).
-pub(crate) fn parameter_list(scene: &Scene) -> String {
-    let mut out = String::new();
-    for entry in scene.parameter_entries() {
-        let _ = match entry {
-            ParameterEntry::Value(name, value) => writeln!(out, "{name} {value}"),
-            ParameterEntry::Grid(b) => {
-                let node = &b.node;
-                writeln!(
-                    out,
-                    "{} [{}, {}, {}] ({} values; select with --grid {node} or --grid-direction \
-                     {node}=U.npy)",
-                    b.name,
-                    b.shape[0],
-                    b.shape[1],
-                    b.shape[2],
-                    b.len()
-                )
-            }
-        };
-    }
-    out
-}
-
-/// Selects the forward-mode directions `(node, U.npy)` of `diff --grid-direction`, in derivative slots
-/// `first_slot`, `first_slot + 1`, ...; returns their blocks' names (`NODE.values`). Errors: an
-/// unreadable U, and those of [`Scene::select_grid_directions`] (a U of another shape names its file).
-pub(crate) fn select_directions(
-    scene: &mut Scene,
-    first_slot: usize,
-    directions: &[(String, PathBuf)],
-) -> Result<Vec<String>, implicit_psdr::Error> {
-    let mut read = Vec::new();
-    for (node, file) in directions {
-        let u = sdf::read_npy(file)?;
-        let [nx, ny, nz] = u.dims;
-        read.push(GridDirection {
-            node: node.clone(),
-            shape: [nz, ny, nx],
-            values: Arc::new(u.values),
-            source: file.display().to_string(),
-        });
-    }
-    scene.select_grid_directions(first_slot, "--grid-direction", &read)
-}
 
 /// Reads the target image (channels `R`, `G`, `B`, finite) and checks its size against the scene's.
 fn read_target(path: &Path, (width, height): (u32, u32)) -> Result<Image> {
-    let image = film::read_exr_rgb(path)?;
+    let image = io::read_exr_rgb(path)?;
     let (w, h) = (image.width, image.height);
     if (w, h) != (width, height) {
         bail!(
@@ -77,12 +30,6 @@ fn read_target(path: &Path, (width, height): (u32, u32)) -> Result<Image> {
 fn grid_output(out: &Path, block: &GridBlock) -> PathBuf {
     let stem = out.file_stem().unwrap_or_default().to_string_lossy();
     out.with_file_name(format!("{stem}.{}.npy", block.name))
-}
-
-/// The file name of `path` (as grad.json refers to the files beside it).
-pub(crate) fn file_name(path: &Path) -> String {
-    let name = path.file_name().unwrap_or(path.as_os_str());
-    name.to_string_lossy().into_owned()
 }
 
 /// `items` joined as "a", "a and b", "a, b and c".
@@ -143,68 +90,9 @@ fn gradient_json(
     Ok(text)
 }
 
-/// A fresh temporary name beside `path` (hidden, ending in `.tmp`).
-fn temporary(path: &Path) -> PathBuf {
-    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let unique = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let pid = std::process::id();
-    path.with_file_name(format!(".{}.{pid}.{unique}.tmp", file_name(path)))
-}
-
-/// Writes a file to the path given, or says why not (one line, without the path).
-pub(crate) type Writer = Box<dyn FnOnce(&Path) -> Result<(), String>>;
-
-/// A writer's message for a library error: a file error's own message (the caller names the file).
-pub(crate) fn file_message(e: implicit_psdr::Error) -> String {
-    match e {
-        implicit_psdr::Error::File { message, .. } => message,
-        e => e.to_string(),
-    }
-}
-
-/// The [`Writer`] of a grid as a float32 `.npy`.
-pub(crate) fn npy_writer(grid: impl std::borrow::Borrow<GridData> + 'static) -> Writer {
-    Box::new(move |tmp| sdf::write_npy(tmp, grid.borrow()).map_err(file_message))
-}
-
-/// Writes every file of `files` (`(path, writer)`) to a temporary name, then renames them all; on any
-/// failure removes what it wrote, so either every file is written or none.
-pub(crate) fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
-    let mut temporaries = Vec::new();
-    let mut renamed = Vec::new();
-    let mut result = Ok(());
-    for (path, write) in files {
-        let tmp = temporary(&path);
-        temporaries.push((tmp.clone(), path.clone()));
-        result = write(&tmp).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
-        if result.is_err() {
-            break;
-        }
-    }
-    if result.is_ok() {
-        for (tmp, path) in &temporaries {
-            result = (std::fs::rename(tmp, path))
-                .with_context(|| format!("{}: cannot write", path.display()));
-            if result.is_err() {
-                break;
-            }
-            renamed.push(path.clone());
-        }
-    }
-    if result.is_err() {
-        for (tmp, _) in &temporaries {
-            let _ = std::fs::remove_file(tmp);
-        }
-        for path in &renamed {
-            let _ = std::fs::remove_file(path);
-        }
-    }
-    result
-}
-
 pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     let out = &args.out;
-    film::check_output_path(out, "--out", "json")?;
+    io::check_output_path(out, "--out", "json")?;
     let scene_path = &args.scene.scene;
     if let (Ok(a), Ok(b)) = (out.canonicalize(), scene_path.canonicalize())
         && a == b
@@ -238,7 +126,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         secondary > 0,
         &scene.unsampled_creases(),
     );
-    println!("note: {note}");
+    outln!("note: {note}")?;
 
     let params: Vec<(String, f64)> = (layout.params.iter().cloned())
         .zip(gradient.iter().copied())
@@ -257,13 +145,11 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         let [nz, ny, nx] = block.shape;
         let what = format!("the gradient of {}", block.name);
         let grid = GridData::new([nx, ny, nz], values, &what)?;
-        files.push((path.clone(), npy_writer(grid)));
+        let writer: Writer = Box::new(move |tmp| io::write_npy(tmp, &grid).map_err(file_message));
+        files.push((path.clone(), writer));
     }
-    files.push((
-        out.clone(),
-        Box::new(move |tmp| std::fs::write(tmp, json).map_err(|e| format!("cannot write: {e}"))),
-    ));
-    write_all_or_nothing(files)?;
+    files.push((out.clone(), io::bytes_writer(json)));
+    io::write_all_or_nothing(files)?;
 
     let mut wrt = Vec::new();
     if !params.is_empty() {
@@ -281,7 +167,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         .map(|p| p.display().to_string())
         .collect();
     let loss_name = format!("{:?}", args.loss).to_lowercase();
-    println!(
+    outln!(
         "{loss_name} loss {} against {} (seed {seed}); gradient with respect to {} (seed {}) at \
          {spp} spp in {:.2} s; wrote {}",
         result.loss,
@@ -290,7 +176,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         implicit_psdr::integrator::gradient::adjoint_seed(seed),
         result.gradient.stats.seconds,
         join_and(&written)
-    );
+    )?;
     warn(&result.gradient.stats);
     Ok(())
 }

@@ -5,22 +5,41 @@
 //! removes the EXR; `grad` writes its JSON and `.npy` files to temporary names and renames them only
 //! when all are written), so a failed run leaves no partial output.
 
+//!
+//! What a command reports goes to stdout through [`outln!`]: a reader that stops reading
+//! (`implicit-psdr params scene.json | head`) silences the rest of the report, and the command
+//! finishes its work and exits with 0.
+
+/// `println!` to stdout as a `Result` (see [`write_stdout`]).
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::write_stdout(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod args;
+mod bake;
+mod diff;
+mod fd;
 mod grad;
 mod optimize;
+mod params;
+mod render;
 mod report;
 
 use anyhow::{Context, Result};
-use args::{BakeArgs, Cli, Command, DiffArgs, EstimatorArgs, FdArgs, OutputArgs, SceneArgs};
+use args::{Cli, Command, EstimatorArgs, OutputArgs, SceneArgs};
 use clap::Parser;
-use implicit_psdr::film::{self, Image, colormap};
+use implicit_psdr::film::{Image, colormap};
 use implicit_psdr::integrator::{
-    self, BoundaryBudget, DiffOptions, Progress, RenderOptions, RenderStats, fd,
+    BoundaryBudget, DiffOptions, Progress, RenderOptions, RenderStats,
 };
-use implicit_psdr::{compare, scene, sdf};
-use std::io::IsTerminal;
+use implicit_psdr::{compare, io, scene};
+use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -65,22 +84,36 @@ fn one_line_usage_error(e: &clap::Error) -> String {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Render { scene, outputs } => render(&scene, &outputs),
-        Command::Bake(args) => bake(&args),
-        Command::Params { scene } => {
-            print!("{}", grad::parameter_list(&load_scene(&scene)?));
-            Ok(())
-        }
-        Command::Diff(args) => diff(&args),
+        Command::Render { scene, outputs } => render::render(&scene, &outputs),
+        Command::Bake(args) => bake::bake(&args),
+        Command::Params { scene } => params::params(&scene),
+        Command::Diff(args) => diff::diff(&args),
         Command::Grad(args) => grad::grad(&args),
-        Command::Fd(args) => finite_difference(&args),
+        Command::Fd(args) => fd::finite_difference(&args),
         Command::Optimize(args) => optimize::optimize(&args),
         Command::Report(args) => report::report(&args),
         Command::Compare { a, b, channel } => {
             let rows = compare::compare_files(&a, &b, channel.as_deref())?;
-            print!("{}", compare::format_table(&a, &b, &rows));
+            write_stdout(format_args!("{}", compare::format_table(&a, &b, &rows)))
+        }
+    }
+}
+
+/// Writes a command's report to stdout. Once the reader has gone away (a closed pipe), the rest of
+/// the report is dropped and the command goes on with its work: what it writes to files does not
+/// depend on who reads its report. Any other failure to write is an error.
+fn write_stdout(text: std::fmt::Arguments<'_>) -> Result<()> {
+    static CLOSED: AtomicBool = AtomicBool::new(false);
+    if CLOSED.load(Ordering::Relaxed) {
+        return Ok(());
+    }
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_fmt(text).and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+            CLOSED.store(true, Ordering::Relaxed);
             Ok(())
         }
+        result => result.context("stdout"),
     }
 }
 
@@ -148,8 +181,8 @@ fn progress_bar() -> Progress {
 fn output_paths(outputs: &OutputArgs, command: &str) -> Result<(PathBuf, PathBuf)> {
     let out = (outputs.out.clone()).unwrap_or_else(|| format!("{command}.exr").into());
     let png = (outputs.png.clone()).unwrap_or_else(|| format!("{command}.png").into());
-    film::check_output_path(&out, "--out", "exr")?;
-    film::check_output_path(&png, "--png", "png")?;
+    io::check_output_path(&out, "--out", "exr")?;
+    io::check_output_path(&png, "--png", "png")?;
     Ok((out, png))
 }
 
@@ -165,123 +198,19 @@ fn warn(stats: &RenderStats) {
 fn write_derivatives(
     paths: &(PathBuf, PathBuf),
     image: &Image,
-    channels: &film::Channels,
+    channels: &io::Channels,
     params: &[String],
     derivatives: &[Image],
 ) -> Result<()> {
     let panels: Vec<&Image> = derivatives.iter().collect();
     let (picture, scales) = colormap::derivative_picture(image, &panels);
     let size = (image.width, image.height);
-    film::write_exr_and_png(&paths.0, &paths.1, size, channels, &picture)?;
+    io::write_exr_and_png(&paths.0, &paths.1, size, channels, &picture)?;
     for (param, scale) in params.iter().zip(scales) {
-        println!(
+        outln!(
             "d.{param}: PNG colour scale ±{scale:.4e} (blue −, white 0, red +; 99th percentile of \
              |mean of R, G, B|)"
-        );
+        )?;
     }
-    Ok(())
-}
-
-fn render(args: &SceneArgs, outputs: &OutputArgs) -> Result<()> {
-    let (out, png) = output_paths(outputs, "out")?;
-    let (scene, options) = prepare(args)?;
-    let (image, stats) = integrator::render(&scene, &options);
-    let size = (image.width, image.height);
-    film::write_exr_and_png(&out, &png, size, &image.rgb_channels(""), &image)?;
-    println!(
-        "rendered {}x{} at {} spp in {:.2} s ({:.3} M samples/s); wrote {} and {}",
-        image.width,
-        image.height,
-        options.spp,
-        stats.seconds,
-        stats.samples as f64 / stats.seconds.max(1e-9) * 1e-6,
-        out.display(),
-        png.display()
-    );
-    warn(&stats);
-    Ok(())
-}
-
-fn bake(args: &BakeArgs) -> Result<()> {
-    let (out, name) = (&args.out, &args.shape);
-    film::check_output_path(out, "--out", "npy")?;
-    let scene = load_scene(&args.scene)?;
-    let shape =
-        (scene.shape_named(name)).with_context(|| format!("--shape: {}", args.scene.display()))?;
-    // The grid samples the SDF in the shape's own coordinates (before its rigid translation).
-    let baked = sdf::bake_padded(&shape.sdf, args.res as usize, &format!("shape {name:?}"))
-        .context("--shape")?;
-    sdf::write_npy(out, &baked.grid)?;
-    let [nx, ny, nz] = baked.grid.dims;
-    // A scene resolves `file` relative to itself: name the file as a scene beside it would.
-    let file = out.file_name().unwrap_or(out.as_os_str()).to_string_lossy();
-    println!(
-        "wrote {} ({nx} x {ny} x {nz} samples, x y z); in a scene file in the same folder use it as\n  {}",
-        out.display(),
-        baked.scene_node(&file)
-    );
-    Ok(())
-}
-
-fn diff(args: &DiffArgs) -> Result<()> {
-    let paths = output_paths(&args.outputs, "diff")?;
-    let (mut scene, render) = prepare(&args.scene)?;
-    let file = in_file(&args.scene.scene);
-    scene.select_parameters(&args.params).map_err(&file)?;
-    // Grid directions take the slots after the named parameters, and their blocks' names.
-    let mut names = args.params.clone();
-    names.extend(
-        grad::select_directions(&mut scene, names.len(), &args.grid_directions).map_err(&file)?,
-    );
-    scene.velocity = args.estimator.velocity_field;
-    let options = diff_options(render, &args.estimator);
-    let count = names.len();
-    let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;
-    let image = &result.image;
-    println!("note: {}", result.note(&scene.unsampled_creases()));
-    let channels = result.channels(&names, args.terms);
-    write_derivatives(&paths, image, &channels, &names, &result.total())?;
-    println!(
-        "rendered {}x{} and {count} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
-        image.width,
-        image.height,
-        if count == 1 { "" } else { "s" },
-        options.render.spp,
-        result.stats.seconds,
-        paths.0.display(),
-        paths.1.display()
-    );
-    warn(&result.stats);
-    Ok(())
-}
-
-fn finite_difference(args: &FdArgs) -> Result<()> {
-    let paths = output_paths(&args.outputs, "fd")?;
-    let (scene, options) = prepare(&args.scene)?;
-    let (param, h) = (&args.param, args.h);
-    // Validates the step and both values before rendering anything.
-    let result = fd::render_with_difference(&scene, param, h, &options)
-        .map_err(in_file(&args.scene.scene))?;
-    let (image, params) = (&result.image, std::slice::from_ref(param));
-    write_derivatives(
-        &paths,
-        image,
-        &result.channels(param),
-        params,
-        &[result.derivative],
-    )?;
-    println!(
-        "central differences of {param} = {} with h = {} (common random numbers): rendered {}x{} \
-         three times at {} spp in {:.2} s; wrote {} and {}",
-        result.value,
-        result.h,
-        image.width,
-        image.height,
-        options.spp,
-        result.stats.seconds,
-        paths.0.display(),
-        paths.1.display()
-    );
-    warn(&result.stats);
     Ok(())
 }

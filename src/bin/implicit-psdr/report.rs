@@ -7,10 +7,10 @@
 //! renamed only when all are written.
 
 use crate::args::ReportArgs;
-use crate::grad::{Writer, write_all_or_nothing};
 use crate::load_scene;
 use anyhow::{Context, Result, bail};
 use implicit_psdr::integrator::fd;
+use implicit_psdr::io::{Writer, write_all_or_nothing};
 use implicit_psdr::report::{self, Estimator, Status, plot, summary};
 use std::io::IsTerminal;
 
@@ -44,15 +44,15 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     )?;
     for s in &plan.skipped {
         let name = summary::section_name(s.parameter.as_deref());
-        println!("skipped {} for {name}: {}", s.estimator.name(), s.reason);
+        outln!("skipped {} for {name}: {}", s.estimator.name(), s.reason)?;
     }
-    println!(
+    outln!(
         "{} series of {:.2} s each ({:.1} s in all); references at {} spp",
         plan.series.len(),
         plan.share,
         plan.budget,
         plan.reference_spp
-    );
+    )?;
     let bar = Bar::new(plan.budget);
     let result = report::run(&plan, given, &mut |status| bar.show(status));
     bar.finish();
@@ -60,7 +60,7 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
 
     for section in &result.sections {
         let name = summary::section_name(section.parameter.as_deref());
-        println!("{name}: reference {}", summary::describe_reference(section));
+        outln!("{name}: reference {}", summary::describe_reference(section))?;
         for e in summary::estimators(section) {
             let points = summary::points(section, e);
             let to5 = match summary::time_to(&points, 0.05) {
@@ -68,12 +68,12 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
                 None => "not reached".into(),
             };
             let last = points.last().expect("a series has a point");
-            println!(
+            outln!(
                 "  {:24} to 5%: {to5:20} bias floor {:.4} at {} spp",
                 e.name(),
                 last.bias_floor,
                 last.spp
-            );
+            )?;
         }
     }
 
@@ -94,10 +94,10 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
         (out.join("report.png"), bytes(png)),
         (out.join("report.svg"), text(svg)),
     ])?;
-    println!(
+    outln!(
         "wrote report.csv, report.md, report.png and report.svg in {}",
         out.display()
-    );
+    )?;
     Ok(())
 }
 

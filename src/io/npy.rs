@@ -7,8 +7,8 @@
 //! `[nz, ny, nx]` (x fastest). We write `'<f4'`; we read `'<f4'` and also `'<f8'` (NumPy's default
 //! float type, converted to `f32`), nothing else.
 
-use super::GridData;
 use crate::error::{Error, Result};
+use crate::sdf::GridData;
 use std::io::Write;
 use std::path::Path;
 

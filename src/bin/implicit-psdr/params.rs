@@ -1,0 +1,36 @@
+//! The `params` command: every parameter of a scene with its value, and each grid's block of values.
+
+use crate::{load_scene, write_stdout};
+use anyhow::Result;
+use implicit_psdr::scene::{ParameterEntry, Scene};
+use std::fmt::Write as _;
+use std::path::Path;
+
+pub(crate) fn params(scene: &Path) -> Result<()> {
+    write_stdout(format_args!("{}", parameter_list(&load_scene(scene)?)))
+}
+
+/// What `params` prints: every parameter as `name value`, and each grid node's values once, as
+/// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end).
+fn parameter_list(scene: &Scene) -> String {
+    let mut out = String::new();
+    for entry in scene.parameter_entries() {
+        let _ = match entry {
+            ParameterEntry::Value(name, value) => writeln!(out, "{name} {value}"),
+            ParameterEntry::Grid(b) => {
+                let node = &b.node;
+                writeln!(
+                    out,
+                    "{} [{}, {}, {}] ({} values; select with --grid {node} or --grid-direction \
+                     {node}=U.npy)",
+                    b.name,
+                    b.shape[0],
+                    b.shape[1],
+                    b.shape[2],
+                    b.len()
+                )
+            }
+        };
+    }
+    out
+}

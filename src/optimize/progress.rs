@@ -1,0 +1,102 @@
+//! `progress.csv`: one row per iteration, the columns [`columns`] names.
+//!
+//! - `iteration`: the 0-based index;
+//! - `loss`: the mean loss over the iteration's views, before its step;
+//! - `seconds`: wall time since the first iteration started;
+//! - `gradient_norm`: the Euclidean norm of the mean gradient;
+//! - `iou`, `chamfer`: how close an optimised grid's shape is to the target scene's shape of the same
+//!   name ([`super::metrics::shape_quality`]); named `iou.SHAPE`, `chamfer.SHAPE` when several shapes
+//!   are compared, absent when none is (targets given as images);
+//! - `loss_pass_seconds` ... `grid_edit_seconds`: where the iteration's time went ([`StageSeconds`]).
+
+use super::StageSeconds;
+
+/// One row of `progress.csv`: a finished iteration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// 0-based index.
+    pub iteration: u32,
+    /// Mean loss over the iteration's views (before the step).
+    pub loss: f64,
+    /// Wall-clock seconds since the first iteration started, at the end of this one.
+    pub seconds: f64,
+    /// Euclidean norm of the mean gradient.
+    pub gradient_norm: f64,
+    /// `(IoU, Chamfer distance)` of each compared shape, in the order of the columns (NaN when the
+    /// shape cannot be measured).
+    pub shapes: Vec<(f64, f64)>,
+    /// Where the iteration's time went.
+    pub stage_seconds: StageSeconds,
+}
+
+/// The columns of `progress.csv` when the shapes `compared` are measured against the target scene.
+pub fn columns(compared: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = ["iteration", "loss", "seconds", "gradient_norm"]
+        .map(String::from)
+        .into();
+    for name in compared {
+        if compared.len() == 1 {
+            out.extend(["iou".to_string(), "chamfer".to_string()]);
+        } else {
+            out.extend([format!("iou.{name}"), format!("chamfer.{name}")]);
+        }
+    }
+    out.extend(
+        [
+            "loss_pass_seconds",
+            "interior_seconds",
+            "primary_seconds",
+            "secondary_seconds",
+            "grid_edit_seconds",
+        ]
+        .map(String::from),
+    );
+    out
+}
+
+impl Row {
+    /// The row's values in the order of [`columns`] (the iteration as a float).
+    pub fn values(&self) -> Vec<f64> {
+        let t = &self.stage_seconds;
+        let mut out = vec![
+            self.iteration as f64,
+            self.loss,
+            self.seconds,
+            self.gradient_norm,
+        ];
+        for &(iou, chamfer) in &self.shapes {
+            out.extend([iou, chamfer]);
+        }
+        out.extend([
+            t.loss_pass,
+            t.interior,
+            t.primary,
+            t.secondary,
+            t.grid_edits,
+        ]);
+        out
+    }
+
+    /// The row as a line of `progress.csv` (without the newline): every number in Rust's shortest
+    /// form that reads back to the same `f64`.
+    pub fn csv(&self) -> String {
+        let t = &self.stage_seconds;
+        let mut row = format!(
+            "{},{},{},{}",
+            self.iteration, self.loss, self.seconds, self.gradient_norm
+        );
+        for (iou, chamfer) in &self.shapes {
+            row += &format!(",{iou},{chamfer}");
+        }
+        row += &format!(
+            ",{},{},{},{},{}",
+            t.loss_pass, t.interior, t.primary, t.secondary, t.grid_edits
+        );
+        row
+    }
+
+    /// The IoU of the first compared shape (what a progress display shows), if any is compared.
+    pub fn iou(&self) -> Option<f64> {
+        self.shapes.first().map(|s| s.0)
+    }
+}
