@@ -364,10 +364,11 @@ fn unknown_and_repeated_names_are_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("--param: no parameter \"ball.radus\"; did you mean ball.radius?"),
+        e.starts_with("params: no parameter \"ball.radus\"; did you mean ball.radius?"),
         "{e}"
     );
-    assert!(e.contains("implicit-psdr params"), "{e}");
+    // The library names its own registry, not a front end's option or command.
+    assert!(!e.contains("--") && !e.contains("implicit-psdr"), "{e}");
     assert!(!e.contains('\n'), "{e}");
     assert_eq!(scene, before, "a failed selection changes nothing");
 
@@ -384,7 +385,7 @@ fn unknown_and_repeated_names_are_clear_errors() {
     let e = scene.parameter("light.colour").unwrap_err().to_string();
     assert!(e.contains("did you mean light.center.x"), "{e}");
     let e = scene.parameter("nothing").unwrap_err().to_string();
-    assert!(e.contains("no parameter \"nothing\" (run"), "{e}");
+    assert_eq!(e, "params: no parameter \"nothing\"");
 
     let e = scene
         .select_parameters(&names(&["ball.radius", "light.center.y", "ball.radius"]))
@@ -471,7 +472,7 @@ fn with_parameter_rejects_values_the_scene_file_would() {
         ("key.radiance.b", -1.0, "key.radiance.b: must be >= 0"),
         ("key.size.x", 0.0, "key.size.x: must be > 0"),
         ("camera.fov_y", 180.0, "camera.fov_y"),
-        ("ball.radius", 1.0, "--param: no parameter"),
+        ("ball.radius", 1.0, "params: no parameter"),
     ] {
         let e = scene.with_parameter(name, value).unwrap_err().to_string();
         assert!(e.contains(expected), "{name} = {value}: {e}");

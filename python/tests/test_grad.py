@@ -94,7 +94,7 @@ def test_bad_gradient_requests(small):
         ip.grad(scene, target=bad, params=["ball.radius"])
     with pytest.raises(ValueError, match=r'loss: unknown loss "l3"'):
         ip.grad(scene, target=image, loss="l3", params=["ball.radius"])
-    with pytest.raises(ip.SceneError, match=r'--param: parameter "ball.radius" is given twice'):
+    with pytest.raises(ip.SceneError, match=r'^params: parameter "ball.radius" is given twice$'):
         ip.grad(scene, target=image, params=["ball.radius", "ball.radius"])
     with pytest.raises(ip.SceneError, match=r'no grid node "blob" \(the scene has no grid\)'):
         ip.grad(scene, target=image, grids=["blob"])

@@ -53,7 +53,8 @@ def test_set_changes_the_render_and_checks_the_range(small):
 
 def test_unknown_parameter_names_near_matches(small):
     scene, _ = small("sphere_floor")
-    with pytest.raises(ip.SceneError, match=r'no parameter "ball\.radiu"; did you mean ball\.radius\?'):
+    with pytest.raises(ip.SceneError, match=r'no parameter "ball\.radiu"; did you mean ball\.radius\? '
+                                            r'\(Scene\.params\(\) lists them\)'):
         scene.set("ball.radiu", 1.0)
     with pytest.raises(ip.SceneError, match=r'no parameter "nope"'):
         ip.diff(scene, ["nope"])

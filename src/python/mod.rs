@@ -26,9 +26,18 @@ create_exception!(
      field (`shapes[0].sdf.radius: must be > 0, got -1`)."
 );
 
-/// The Python exception for a library error: its one-line message.
+/// The Python exception for a library error: its one-line message, whose fields are the keyword
+/// arguments of the same names (`params`, `grids`, `grid_directions`, `target`), and where to find the
+/// parameter names when one is unknown.
 pub(crate) fn scene_error(e: crate::Error) -> PyErr {
-    SceneError::new_err(e.to_string())
+    match e {
+        crate::Error::Field { field, message }
+            if field == "params" && message.starts_with("no parameter") =>
+        {
+            SceneError::new_err(format!("{field}: {message} (Scene.params() lists them)"))
+        }
+        e => SceneError::new_err(e.to_string()),
+    }
 }
 
 /// Runs `work` without the GIL, on at most `threads` threads (all of rayon's global pool when

@@ -142,7 +142,7 @@ pub(crate) fn diff<'py>(
     // Grid directions take the slots after the named parameters, as in the command-line tool.
     let mut names = params;
     let blocks = scene
-        .select_grid_directions(names.len(), "grid_directions", &directions)
+        .select_grid_directions(names.len(), &directions)
         .map_err(scene_error)?;
     names.extend(blocks);
     let count = names.len();

@@ -64,7 +64,7 @@ impl Estimator {
             let e = (Estimator::ALL.into_iter().find(|e| e.name() == name)).ok_or_else(|| {
                 let known: Vec<&str> = Estimator::ALL.iter().map(|e| e.name()).collect();
                 format!(
-                    "--estimators: unknown estimator {name:?} (known: {})",
+                    "estimators: unknown estimator {name:?} (known: {})",
                     known.join(", ")
                 )
             })?;
@@ -93,7 +93,7 @@ mod tests {
         );
         let e = Estimator::parse_list("complete,fdd").unwrap_err();
         assert!(
-            e.contains("\"fdd\"") && e.starts_with("--estimators"),
+            e.contains("\"fdd\"") && e.starts_with("estimators: "),
             "{e}"
         );
         assert!(Estimator::parse_list("").is_err());

@@ -65,16 +65,18 @@ pub fn plan(
     computed_references: bool,
 ) -> Result<Plan> {
     if !(budget.is_finite() && budget > 0.0) {
-        return Err(Error::Unsupported(format!(
-            "--budget: expected a finite number of seconds > 0, got {budget}"
-        )));
+        return Err(Error::field(
+            "budget",
+            format!("expected a finite number of seconds > 0, got {budget}"),
+        ));
     }
     let mut subjects = Vec::new();
     for (k, p) in parameters.iter().enumerate() {
         if parameters[..k].contains(p) {
-            return Err(Error::Unsupported(format!(
-                "--param: parameter {p:?} is given twice"
-            )));
+            return Err(Error::field(
+                "params",
+                format!("parameter {p:?} is given twice"),
+            ));
         }
         subjects.push(Subject::derivative(scene, p)?);
     }
@@ -85,9 +87,12 @@ pub fn plan(
         if computed_references
             && let Some(why) = subject.finite_difference_refused(subject.step() / 2.0)
         {
-            return Err(Error::Unsupported(format!(
-                "--param {p}: no reference: finite differences cannot run ({why}); give --reference"
-            )));
+            return Err(Error::field(
+                "params",
+                format!(
+                    "{p}: no reference: finite differences cannot run ({why}); give a reference"
+                ),
+            ));
         }
         let derivatives =
             (estimators.iter()).any(|e| e.boundary_scale().is_some() || *e == Estimator::Interior);
@@ -369,7 +374,7 @@ mod tests {
         let radius = ["ball.radius".to_string()];
         for budget in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let e = plan(&scene, &radius, &Estimator::ALL, budget, true).unwrap_err();
-            assert!(e.to_string().contains("--budget"), "{e}");
+            assert!(e.to_string().starts_with("budget: "), "{e}");
         }
         let twice = ["ball.radius".to_string(), "ball.radius".to_string()];
         let e = plan(&scene, &twice, &Estimator::ALL, 1.0, true).unwrap_err();

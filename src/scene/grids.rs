@@ -150,13 +150,12 @@ impl Scene {
 
     /// Selects the forward-mode `directions` of grid values in derivative slots `first_slot`,
     /// `first_slot + 1`, ... (every other grid constant); returns their blocks' names (`NODE.values`),
-    /// the names of their derivatives. `option` names the request in errors (`--grid-direction`).
-    /// Errors: an unknown or repeated node, a direction whose shape is not the grid's (naming its
+    /// the names of their derivatives. Errors (on the field `grid_directions`): an unknown or repeated
+    /// node, a direction whose shape is not the grid's (naming its
     /// source and both shapes); on error the scene is unchanged.
     pub fn select_grid_directions(
         &mut self,
         first_slot: usize,
-        option: &str,
         directions: &[GridDirection],
     ) -> Result<Vec<String>> {
         let blocks = self.grid_blocks();
@@ -166,13 +165,13 @@ impl Scene {
             let node = self.grid_node(&direction.node);
             let Some(block) = blocks.iter().find(|b| b.node == node) else {
                 return Err(match self.unknown_grid(&node) {
-                    Error::Field { message, .. } => Error::field(option, message),
+                    Error::Field { message, .. } => Error::field("grid_directions", message),
                     e => e,
                 });
             };
             if selection.iter().any(|(n, _)| *n == node) {
                 return Err(Error::field(
-                    option,
+                    "grid_directions",
                     format!("grid {node:?} is given twice"),
                 ));
             }
@@ -290,7 +289,7 @@ impl Scene {
             };
             if selection[..k].iter().any(|(n, _)| n == node) {
                 return Err(Error::field(
-                    "--grid",
+                    "grids",
                     format!("grid {node:?} is given twice"),
                 ));
             }
@@ -298,9 +297,9 @@ impl Scene {
                 && u.len() != block.len()
             {
                 return Err(Error::field(
-                    format!("--grid-direction {node}"),
+                    "grid_directions",
                     format!(
-                        "the direction has {} values, the grid {} (shape {:?})",
+                        "the direction of grid {node:?} has {} values, the grid {} (shape {:?})",
                         u.len(),
                         block.len(),
                         block.shape
@@ -328,7 +327,7 @@ impl Scene {
         } else {
             format!("grid nodes: {}", nodes.join(", "))
         };
-        Error::field("--grid", format!("no grid node {node:?} ({known})"))
+        Error::field("grids", format!("no grid node {node:?} ({known})"))
     }
 
     /// The scene with its derived data (shape bounds and Lipschitz bounds, tracer tolerance)

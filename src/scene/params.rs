@@ -161,7 +161,7 @@ impl Scene {
         for (k, name) in names.iter().enumerate() {
             if names[..k].contains(name) {
                 return Err(Error::field(
-                    "--param",
+                    "params",
                     format!("parameter {name:?} is given twice"),
                 ));
             }
@@ -220,21 +220,18 @@ impl Scene {
         Ok(copy.refreshed())
     }
 
-    /// The error for an unknown parameter name: near matches by edit distance, or else names of the same
-    /// object, and a pointer to the `params` command.
+    /// The error for an unknown parameter name, on the field `params` (the registry of
+    /// [`Scene::parameters`]; front ends name their own option): near matches by edit distance, or else
+    /// names of the same object.
     fn unknown(&self, name: &str) -> Error {
         let names: Vec<String> = self.parameters().into_iter().map(|(n, _)| n).collect();
         let near = near_matches(name, &names);
-        let hint = "run `implicit-psdr params SCENE.json` to list them";
         let message = if near.is_empty() {
-            format!("no parameter {name:?} ({hint})")
+            format!("no parameter {name:?}")
         } else {
-            format!(
-                "no parameter {name:?}; did you mean {}? ({hint})",
-                near.join(", ")
-            )
+            format!("no parameter {name:?}; did you mean {}?", near.join(", "))
         };
-        Error::field("--param", message)
+        Error::field("params", message)
     }
 
     /// Every broken field rule of the scene file, as errors naming the parameter (see

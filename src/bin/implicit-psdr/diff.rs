@@ -59,5 +59,5 @@ pub(crate) fn select_directions(
             source: file.display().to_string(),
         });
     }
-    scene.select_grid_directions(first_slot, "--grid-direction", &read)
+    scene.select_grid_directions(first_slot, &read)
 }

@@ -117,10 +117,40 @@ fn write_stdout(text: std::fmt::Arguments<'_>) -> Result<()> {
     }
 }
 
-/// Puts the scene file in front of a field error (file errors name their file already).
+/// The command-line option behind each argument of the library that its errors name.
+const OPTIONS: &[(&str, &str)] = &[
+    ("params", "--param"),
+    ("grids", "--grid"),
+    ("grid_directions", "--grid-direction"),
+    ("target", "--target"),
+    ("budget", "--budget"),
+    ("estimators", "--estimators"),
+];
+
+/// A library error in the command line's words: the option in place of the library argument it
+/// sets, and where to find the parameter names.
+pub(crate) fn flagged(e: implicit_psdr::Error) -> implicit_psdr::Error {
+    let implicit_psdr::Error::Field { field, message } = e else {
+        return e;
+    };
+    match OPTIONS.iter().find(|(argument, _)| *argument == field) {
+        Some((argument, option)) => {
+            let hint = *argument == "params" && message.starts_with("no parameter");
+            let message = match hint {
+                true => format!("{message} (run `implicit-psdr params SCENE.json` to list them)"),
+                false => message,
+            };
+            implicit_psdr::Error::field(*option, message)
+        }
+        None => implicit_psdr::Error::Field { field, message },
+    }
+}
+
+/// Puts the scene file in front of a field error (file errors name their file already), in the
+/// command line's words ([`flagged`]).
 fn in_file(path: &Path) -> impl Fn(implicit_psdr::Error) -> anyhow::Error + '_ {
-    move |e| match e {
-        implicit_psdr::Error::Field { .. } => anyhow::anyhow!("{}: {e}", path.display()),
+    move |e| match flagged(e) {
+        e @ implicit_psdr::Error::Field { .. } => anyhow::anyhow!("{}: {e}", path.display()),
         e => e.into(),
     }
 }

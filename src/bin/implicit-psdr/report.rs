@@ -17,12 +17,15 @@ use std::io::IsTerminal;
 pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let estimators = match &args.estimators {
-        Some(list) => Estimator::parse_list(list).map_err(anyhow::Error::msg)?,
+        // The library names the list `estimators`; here it is the option's value.
+        Some(list) => Estimator::parse_list(list).map_err(|e| anyhow::anyhow!("--{e}"))?,
         None => Estimator::ALL.to_vec(),
     };
     for p in &args.params {
         // The error names `--param` and the parameter itself, as `fd`'s does.
-        fd::parameter_value(&scene, p).with_context(|| args.scene.display().to_string())?;
+        fd::parameter_value(&scene, p)
+            .map_err(crate::flagged)
+            .with_context(|| args.scene.display().to_string())?;
     }
     let out = &args.out;
     if out.exists() && !out.is_dir() {
@@ -41,7 +44,8 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
         &estimators,
         args.budget,
         given.is_none(),
-    )?;
+    )
+    .map_err(crate::flagged)?;
     for s in &plan.skipped {
         let name = summary::section_name(s.parameter.as_deref());
         outln!("skipped {} for {name}: {}", s.estimator.name(), s.reason)?;

@@ -78,7 +78,7 @@ impl GradientLayout {
             }
             if entries > MAX_GRADIENT_ENTRY as usize {
                 return Err(Error::field(
-                    "--grid",
+                    "grids",
                     format!("{entries} gradient entries is more than reverse mode can index"),
                 ));
             }
@@ -279,7 +279,7 @@ pub fn loss_gradient(
 ) -> Result<LossGradient> {
     let start = std::time::Instant::now();
     let (image, loss_stats) = render(scene, &options.render);
-    let (value, adjoint) = loss.evaluate(&image, target, "--target")?;
+    let (value, adjoint) = loss.evaluate(&image, target, "target")?;
     let loss_seconds = start.elapsed().as_secs_f64();
     let adjoint_options = DiffOptions {
         render: RenderOptions {
