@@ -103,6 +103,7 @@ fn main() -> implicit_psdr::Result<()> {
                 },
                 normalization: *normalization,
                 boundary: *boundary,
+                ..Default::default()
             };
             let d = render_derivatives(&selected, params.len(), &options)?;
             for (k, total) in d.total().iter().enumerate() {

@@ -93,6 +93,7 @@ fn options(spp: u32, seed: u64, primary: u32, secondary: u32, norm: Normalizatio
             primary_spp: Some(primary),
             secondary_spp: Some(secondary),
         },
+        ..Default::default()
     }
 }
 

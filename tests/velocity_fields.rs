@@ -9,8 +9,9 @@
 
 mod common;
 
-use common::deriv::{derivative_terms, fd, scene_json};
-use implicit_psdr::scene::{Scene, VelocityField};
+use common::deriv::{derivative_terms_with, fd, scene_json};
+use implicit_psdr::integrator::VelocityField;
+use implicit_psdr::scene::Scene;
 
 /// A torus of major radius 1 and minor radius `minor`, tilted, under a sky and a rectangle light,
 /// seen from 4 units on a 32×32 film (a pixel is about 0.09 units wide at the torus).
@@ -32,13 +33,12 @@ fn thin_torus(minor: f32) -> Scene {
 
 /// Image sums of the complete derivative of `name` at `spp` over `seeds`, with `field`.
 fn sums(scene: &Scene, name: &str, field: VelocityField, spp: u32, seeds: &[u64]) -> Vec<f64> {
-    let mut scene = scene.clone();
-    scene.velocity = field;
     let pixels = (scene.camera.width * scene.camera.height) as u64;
+    let budget = (pixels * 8, pixels * 32);
     seeds
         .iter()
         .map(|&seed| {
-            let t = derivative_terms(&scene, &[name], spp, pixels * 8, pixels * 32, seed);
+            let t = derivative_terms_with(scene, &[name], spp, budget, seed, field);
             t[0].total().iter().sum()
         })
         .collect()
@@ -213,11 +213,11 @@ fn blended_balls(k: f32) -> Scene {
 /// Blurred relative L2 of the complete derivative of `b.center.x` on [`blended_balls`] against finite
 /// differences (step 0.01, 4096 spp), with `field` at 256 spp and the default boundary budgets.
 fn blend_error(k: f32, field: VelocityField, seed: u64) -> f64 {
-    let mut scene = blended_balls(k);
+    let scene = blended_balls(k);
     let f = fd(&scene, "b.center.x", 0.01, 4096, 77);
-    scene.velocity = field;
     let pixels = 32 * 32;
-    let t = derivative_terms(&scene, &["b.center.x"], 256, pixels * 8, pixels * 32, seed);
+    let budget = (pixels * 8, pixels * 32);
+    let t = derivative_terms_with(&scene, &["b.center.x"], 256, budget, seed, field);
     common::deriv::errors(&format!("k {k} {field:?} seed {seed}"), &t[0], &f, 32, 32).l2
 }
 
@@ -284,27 +284,25 @@ fn smooth_union_hard_cases_are_finite() {
                 "emitters": {HARD_CASE_LIGHTS}}}"#
         ));
         for field in [VelocityField::Auto, VelocityField::Carried] {
-            let mut s = scene.clone();
-            s.velocity = field;
-            derivative_terms(
-                &s,
+            derivative_terms_with(
+                &scene,
                 &["b.center.x", "a.radius", "blob.translate.y"],
                 16,
-                2048,
-                8192,
+                (2048, 8192),
                 5,
+                field,
             );
         }
     }
 }
 
-/// `∫ ∂πJ dA` over the surface of shape 0 with the scene's field, and the area itself, estimated on
-/// `lines` area-sampling lines (a low-discrepancy sequence, the same for every scene).
-fn area_and_its_derivative(scene: &Scene, lines: usize) -> (f64, f64) {
+/// `∫ ∂πJ dA` over the surface of shape 0 with the velocity field `field`, and the area itself,
+/// estimated on `lines` area-sampling lines (a low-discrepancy sequence, the same for every scene).
+fn area_and_its_derivative(scene: &Scene, lines: usize, field: VelocityField) -> (f64, f64) {
     use implicit_psdr::integrator::attach::SceneAttach;
     use implicit_psdr::integrator::surface_sampling::sample_surface;
     use implicit_psdr::scalar::Dual32;
-    let attach = SceneAttach::new(scene);
+    let attach = SceneAttach::new(scene, field);
     let shape = &scene.shapes[0];
     let mut hits = Vec::new();
     let (mut area, mut derivative) = (0.0f64, 0.0f64);
@@ -344,14 +342,12 @@ fn smooth_union_field_changes_the_area_as_the_surface_does() {
         let value = base.parameter(name).unwrap();
         let plus = base.with_parameter(name, value + h).unwrap();
         let minus = base.with_parameter(name, value - h).unwrap();
-        let fd = (area_and_its_derivative(&plus, lines).0
-            - area_and_its_derivative(&minus, lines).0)
-            / (2.0 * h as f64);
+        let area = |s: &Scene| area_and_its_derivative(s, lines, VelocityField::default()).0;
+        let fd = (area(&plus) - area(&minus)) / (2.0 * h as f64);
         for field in [VelocityField::Carried, VelocityField::Normal] {
             let mut scene = blended_balls(0.05);
             scene.select_parameters(&[name.to_string()]).unwrap();
-            scene.velocity = field;
-            let (_, d) = area_and_its_derivative(&scene, lines);
+            let (_, d) = area_and_its_derivative(&scene, lines, field);
             eprintln!("{name} {field:?}: ∫∂J dA {d:.5}, fd {fd:.5}");
             assert!(
                 (d - fd).abs() < 0.03 * fd.abs().max(1.0),
@@ -386,10 +382,8 @@ fn carried_hard_cases_are_finite() {
                 "emitters": {HARD_CASE_LIGHTS}}}"#
         ));
         for field in [VelocityField::Auto, VelocityField::Carried] {
-            let mut s = scene.clone();
-            s.velocity = field;
-            derivative_terms(
-                &s,
+            derivative_terms_with(
+                &scene,
                 &[
                     "ring.major_radius",
                     "ring.translate.x",
@@ -397,9 +391,9 @@ fn carried_hard_cases_are_finite() {
                     "floor.offset",
                 ],
                 16,
-                2048,
-                8192,
+                (2048, 8192),
                 5,
+                field,
             );
         }
     }

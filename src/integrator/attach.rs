@@ -16,12 +16,13 @@
 //!
 //! Shapes whose curvature radius can be below a pixel may move by a field with a tangential part
 //! instead of the normal field ([`super::velocity`], theory §8), chosen per shape by
-//! [`crate::scene::VelocityField`].
+//! [`crate::integrator::VelocityField`].
 //!
 //! Every attached quantity has exactly the recorded primal (position, normal, `J = 1`), so a derivative
 //! pass reproduces the image bit for bit. Shapes and emitters without a selected parameter are attached
 //! as constants (no Hessian).
 
+use super::options::VelocityField;
 use super::path::{Anchor, Attach, Attached};
 use super::velocity;
 use crate::math::Vec3;
@@ -111,11 +112,16 @@ pub struct SceneAttach<'a> {
 }
 
 impl<'a> SceneAttach<'a> {
-    /// Precomputes which shapes and emitters move with the selected parameters.
-    pub fn new(scene: &'a Scene) -> Self {
+    /// Precomputes which shapes and emitters move with the selected parameters, and the field that
+    /// moves each shape's points under the choice `velocity`.
+    pub fn new(scene: &'a Scene, velocity: VelocityField) -> Self {
         let shape_moves: Vec<bool> = scene.shapes.iter().map(geometry_selected).collect();
         let field = (scene.shapes.iter().zip(&shape_moves))
-            .map(|(shape, &moves)| moves.then(|| velocity::Field::of(scene, shape)).flatten())
+            .map(|(shape, &moves)| {
+                moves
+                    .then(|| velocity::Field::of(scene, shape, velocity))
+                    .flatten()
+            })
             .collect();
         Self {
             scene,
@@ -241,7 +247,6 @@ mod tests {
     use crate::integrator::IntegratorKind;
     use crate::scalar::Dual32;
     use crate::scalar::Param3;
-    use crate::scene::VelocityField;
     use crate::sdf::Sdf;
 
     fn scene_with(sdf: Sdf) -> Scene {
@@ -318,7 +323,7 @@ mod tests {
     fn attached_normal_matches_perturbed_surface() {
         let cx = 1.2;
         let scene = blob(cx, true);
-        let attach = SceneAttach::new(&scene);
+        let attach = SceneAttach::new(&scene, VelocityField::Auto);
         let h = 2e-3;
         let (plus, minus) = (blob(cx + h, false), blob(cx - h, false));
         let mut largest = 0.0f32;
@@ -359,7 +364,7 @@ mod tests {
         if let Sdf::Sphere { radius, .. } = &mut scene.shapes[0].sdf {
             radius.slot = Some(0);
         }
-        let attach = SceneAttach::new(&scene);
+        let attach = SceneAttach::new(&scene, VelocityField::Auto);
         let n = glam::Vec3::new(0.36, 0.48, 0.8);
         let a = attach.shape_vertex::<Dual32>(0, n * 1.5, n);
         assert!((a.j.eps - 2.0 / 1.5).abs() < 1e-5, "{}", a.j.eps);
@@ -371,8 +376,8 @@ mod tests {
         }
     }
 
-    /// A one-shape scene from the JSON of its sdf, parameter `param` selected, with `field`.
-    fn json_scene(sdf: &str, param: &str, field: VelocityField) -> Scene {
+    /// A one-shape scene from the JSON of its sdf, parameter `param` selected.
+    fn json_scene(sdf: &str, param: &str) -> Scene {
         let json = format!(
             r#"{{"camera": {{"origin": [0, 0, 6], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
                 "width": 8, "height": 8}},
@@ -382,7 +387,6 @@ mod tests {
         );
         let mut scene = crate::scene::parse(&json, std::path::Path::new(".")).unwrap();
         scene.select_parameters(&[param.to_string()]).unwrap();
-        scene.velocity = field;
         scene
     }
 
@@ -473,10 +477,10 @@ mod tests {
     #[test]
     fn carried_points_stay_on_the_moving_surface() {
         for (sdf, param) in CARRIED {
-            let scene = json_scene(sdf, param, VelocityField::Carried);
-            let normal = json_scene(sdf, param, VelocityField::Normal);
-            let attach = SceneAttach::new(&scene);
-            let reference = SceneAttach::new(&normal);
+            let scene = json_scene(sdf, param);
+            let normal = json_scene(sdf, param);
+            let attach = SceneAttach::new(&scene, VelocityField::Carried);
+            let reference = SceneAttach::new(&normal, VelocityField::Normal);
             assert!(attach.field[0].is_some(), "{param}: carried");
             for (p, n) in surface_points(&scene) {
                 let a = attach.shape_vertex::<Dual32>(0, p, n);
@@ -526,8 +530,8 @@ mod tests {
         ];
         for (i, expected) in cases {
             let (sdf, param) = CARRIED[i];
-            let scene = json_scene(sdf, param, VelocityField::Carried);
-            let attach = SceneAttach::new(&scene);
+            let scene = json_scene(sdf, param);
+            let attach = SceneAttach::new(&scene, VelocityField::Carried);
             for (p, n) in surface_points(&scene) {
                 let j = attach.shape_vertex::<Dual32>(0, p, n).j.eps;
                 let e = expected(p);
@@ -539,8 +543,8 @@ mod tests {
         }
         // The scale of a transform changes areas by s² per unit s: ∂πJ = 2/s.
         let (sdf, param) = CARRIED[8];
-        let scene = json_scene(sdf, param, VelocityField::Carried);
-        let attach = SceneAttach::new(&scene);
+        let scene = json_scene(sdf, param);
+        let attach = SceneAttach::new(&scene, VelocityField::Carried);
         for (p, n) in surface_points(&scene) {
             let j = attach.shape_vertex::<Dual32>(0, p, n).j.eps;
             assert!((j - 2.0 / 1.3).abs() < 1e-3, "scale at {p}: ∂πJ {j}");
@@ -553,7 +557,7 @@ mod tests {
     fn auto_carries_only_thin_shapes_seen_from_afar() {
         let thin = r#"{"type": "torus", "center": [0, 0, 0], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
         let auto = |sdf: &str, param: &str| {
-            SceneAttach::new(&json_scene(sdf, param, VelocityField::Auto)).field[0].is_some()
+            SceneAttach::new(&json_scene(sdf, param), VelocityField::Auto).field[0].is_some()
         };
         assert!(auto(thin, "s.major_radius"));
         assert!(!auto(
@@ -568,7 +572,7 @@ mod tests {
         let around_eye = r#"{"type": "torus", "center": [0, 0, 6], "axis": [0, 1, 0], "major_radius": 1, "minor_radius": 0.002}"#;
         assert!(!auto(around_eye, "s.major_radius"));
         assert!(
-            SceneAttach::new(&json_scene(thin, "s.major_radius", VelocityField::Normal)).field[0]
+            SceneAttach::new(&json_scene(thin, "s.major_radius"), VelocityField::Normal).field[0]
                 .is_none()
         );
     }

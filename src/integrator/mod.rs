@@ -73,5 +73,5 @@ pub use diff::{
 };
 pub use driver::RenderStats;
 pub use gradient::{Gradient, GradientLayout, Loss, LossGradient, loss_gradient, render_gradient};
-pub use options::{BoundaryBudget, DiffOptions, Progress, RenderOptions};
+pub use options::{BoundaryBudget, DiffOptions, Progress, RenderOptions, VelocityField};
 pub use primal::{CAMERA_STREAM, render, sample_pixel, trace_sample};

@@ -111,6 +111,38 @@ pub struct DiffOptions {
     pub normalization: Normalization,
     /// Boundary samples of the complete derivative.
     pub boundary: BoundaryBudget,
+    /// How the passes move the points of shapes (docs/theory.md §8).
+    pub velocity: VelocityField,
+}
+
+/// The velocity field by which derivative passes move the points of shapes' surfaces (docs/theory.md
+/// §8). Every choice gives the same derivative in expectation; they differ in variance.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum VelocityField {
+    /// The shape's known motion ([`crate::sdf::Sdf::carried`]: rigid for translations and rotations, radial for a
+    /// torus's major radius) where its curvature radius is below a pixel where the camera sees it,
+    /// the normal field elsewhere.
+    #[default]
+    Auto,
+    /// The normal field `x = p + V n` everywhere (`∂πJ = κV`).
+    Normal,
+    /// The known motion of every shape that has one (without creases), wherever the camera is.
+    Carried,
+}
+
+impl std::str::FromStr for VelocityField {
+    type Err = String;
+    /// `"auto"`, `"normal"` or `"carried"`.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        match text {
+            "auto" => Ok(Self::Auto),
+            "normal" => Ok(Self::Normal),
+            "carried" => Ok(Self::Carried),
+            _ => Err(format!(
+                "unknown velocity field {text:?} (expected auto, normal or carried)"
+            )),
+        }
+    }
 }
 
 /// Derivatives move film points under the pixel filter: refuses a discontinuous (box) filter, whose

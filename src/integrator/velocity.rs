@@ -27,9 +27,10 @@
 //!   children's normals are nearly parallel (their crease is ill-conditioned there). `∇w` enters the
 //!   divergence through the Jacobian, of order `1/ℓ`, not `1/k`.
 
+use crate::integrator::options::VelocityField;
 use crate::math::Vec3;
 use crate::scalar::{Grad, Scalar};
-use crate::scene::{Scene, Shape, VelocityField};
+use crate::scene::{Scene, Shape};
 use crate::sdf::Sdf;
 
 /// `sin²` of the angle between the children's normals below which a crease's field fades out (about
@@ -47,13 +48,13 @@ pub enum Field<'a> {
 }
 
 impl<'a> Field<'a> {
-    /// The field of `shape` under `scene`'s choice ([`VelocityField`]); `None` for the normal field.
+    /// The field of `shape` in `scene` under the choice `velocity`; `None` for the normal field.
     /// With [`VelocityField::Auto`]: a shape without creases with a known field, whose curvature
     /// radius can be below the width of a pixel where the camera sees it (the normal field's `κV` is
     /// heavy-tailed there). Near the eye the normal field stays: a tangential motion there moves the
     /// image fast, and the moving pixel filter's term (theory §2.5) grows with it.
-    pub fn of(scene: &Scene, shape: &'a Shape) -> Option<Self> {
-        if scene.velocity == VelocityField::Normal || shape.creased {
+    pub fn of(scene: &Scene, shape: &'a Shape, velocity: VelocityField) -> Option<Self> {
+        if velocity == VelocityField::Normal || shape.creased {
             return None;
         }
         let known = if (shape.sdf)
@@ -64,7 +65,7 @@ impl<'a> Field<'a> {
         } else {
             Field::Crease(SmoothPair::of(&shape.sdf)?)
         };
-        if scene.velocity == VelocityField::Carried {
+        if velocity == VelocityField::Carried {
             return Some(known);
         }
         let camera = &scene.camera;

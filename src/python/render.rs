@@ -5,7 +5,9 @@ use super::arrays::image_to_py;
 use super::scene::PyScene;
 use super::{run_detached, scene_error};
 use crate::film::Normalization;
-use crate::integrator::{self, BoundaryBudget, DiffOptions, RenderOptions, RenderStats};
+use crate::integrator::{
+    self, BoundaryBudget, DiffOptions, RenderOptions, RenderStats, VelocityField,
+};
 use crate::scene::{GridDirection, Scene};
 use pyo3::exceptions::{PyRuntimeWarning, PyValueError};
 use pyo3::prelude::*;
@@ -29,10 +31,10 @@ pub(crate) fn render_options(
 }
 
 /// The derivative options of `diff` and `grad`: those of [`render_options`], the boundary budgets
-/// `(primary, secondary)` (`None`: the default) and the pixel normalisation, as the tool's; the
-/// velocity field (`"auto"`, `"normal"` or `"carried"`, as `--velocity-field`) is set on `scene`.
+/// `(primary, secondary)` (`None`: the default), the pixel normalisation and the velocity field
+/// (`"auto"`, `"normal"` or `"carried"`), as the tool's.
 pub(crate) fn diff_options(
-    scene: &mut Scene,
+    scene: &Scene,
     (spp, seed): (Option<u32>, u64),
     (primary_spp, secondary_spp): (Option<u32>, Option<u32>),
     (normalization, velocity_field): (&str, &str),
@@ -40,7 +42,7 @@ pub(crate) fn diff_options(
     let normalization: Normalization = normalization
         .parse()
         .map_err(|e: String| PyValueError::new_err(format!("normalization: {e}")))?;
-    scene.velocity = velocity_field
+    let velocity: VelocityField = velocity_field
         .parse()
         .map_err(|e: String| PyValueError::new_err(format!("velocity_field: {e}")))?;
     Ok(DiffOptions {
@@ -50,6 +52,7 @@ pub(crate) fn diff_options(
             primary_spp,
             secondary_spp,
         },
+        velocity,
     })
 }
 

@@ -5,7 +5,9 @@
 use implicit_psdr::film::Image;
 use implicit_psdr::integrator::RenderOptions;
 use implicit_psdr::integrator::fd::finite_difference;
-use implicit_psdr::integrator::{DerivativeImages, DiffOptions, render_derivatives_with_boundary};
+use implicit_psdr::integrator::{
+    DerivativeImages, DiffOptions, VelocityField, render_derivatives_with_boundary,
+};
 use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, Scene};
 
@@ -117,13 +119,31 @@ pub fn derivative_terms(
     secondary_samples: u64,
     seed: u64,
 ) -> Vec<Terms> {
+    let budget = (primary_samples, secondary_samples);
+    derivative_terms_with(scene, names, spp, budget, seed, VelocityField::default())
+}
+
+/// [`derivative_terms`] with the boundary samples `(primary, secondary)` and the velocity field
+/// `velocity`.
+pub fn derivative_terms_with(
+    scene: &Scene,
+    names: &[&str],
+    spp: u32,
+    (primary_samples, secondary_samples): (u64, u64),
+    seed: u64,
+    velocity: VelocityField,
+) -> Vec<Terms> {
     let mut scene = scene.clone();
     let owned: Vec<String> = names.iter().map(|s| s.to_string()).collect();
     scene.select_parameters(&owned).unwrap();
+    let options = DiffOptions {
+        velocity,
+        ..diff_options(spp, seed)
+    };
     let out = render_derivatives_with_boundary(
         &scene,
         names.len(),
-        &diff_options(spp, seed),
+        &options,
         primary_samples,
         secondary_samples,
     )

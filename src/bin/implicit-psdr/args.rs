@@ -1,8 +1,8 @@
 //! The command line: subcommands, their arguments and help texts, and the parsers of argument values.
 
 use clap::{ArgGroup, Args, Parser, Subcommand};
+use implicit_psdr::integrator::VelocityField;
 use implicit_psdr::integrator::{Loss, Normalization};
-use implicit_psdr::scene::VelocityField;
 use std::path::PathBuf;
 
 /// Physically based rendering of implicit surfaces.

@@ -18,7 +18,6 @@ pub(crate) fn diff(args: &DiffArgs) -> Result<()> {
     // Grid directions take the slots after the named parameters, and their blocks' names.
     let mut names = args.params.clone();
     names.extend(select_directions(&mut scene, names.len(), &args.grid_directions).map_err(&file)?);
-    scene.velocity = args.estimator.velocity_field;
     let options = diff_options(render, &args.estimator);
     let count = names.len();
     let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;

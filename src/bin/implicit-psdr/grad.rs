@@ -115,7 +115,6 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
             );
         }
     }
-    scene.velocity = args.estimator.velocity_field;
     let options = diff_options(render, &args.estimator);
     let result = loss_gradient(&scene, &layout, &target, args.loss, &options).map_err(&file)?;
     let gradient = result.gradient.total();

@@ -184,6 +184,7 @@ fn diff_options(render: RenderOptions, args: &EstimatorArgs) -> DiffOptions {
             primary_spp: args.spp_primary,
             secondary_spp: args.spp_secondary,
         },
+        velocity: args.velocity_field,
     }
 }
 

@@ -190,10 +190,9 @@ pub fn render_primary_terms(
         });
     }
     let sources = PrimarySources::of(scene)?;
-    let render = &options.render;
     let (radiance, coverage, stats) = dispatch_directions!(
         count,
-        term_images(scene, count, render, samples, &sources, true)
+        term_images(scene, count, options, samples, &sources, true)
     );
     Ok(PrimaryTerm {
         radiance,

@@ -183,10 +183,9 @@ pub(crate) fn secondary_term(
         return Ok((Vec::new(), RenderStats::default()));
     }
     let sources = SecondarySources::of(scene, tangent);
-    let render = &options.render;
     let (images, _, stats) = dispatch_directions!(
         count,
-        term_images(scene, count, render, samples, &sources, false)
+        term_images(scene, count, options, samples, &sources, false)
     );
     Ok((images, stats))
 }

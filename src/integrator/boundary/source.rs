@@ -13,7 +13,7 @@ use crate::film::{Film, Image, SampleSink, SplatFilm};
 use crate::integrator::attach::{SceneAttach, for_each_window};
 use crate::integrator::boundary::subpaths::CameraVertex;
 use crate::integrator::driver::{self, RenderStats};
-use crate::integrator::options::RenderOptions;
+use crate::integrator::options::{DiffOptions, RenderOptions, VelocityField};
 use crate::integrator::path::{PathRecord, TraceCounters};
 use crate::integrator::surface_sampling::SurfaceSample;
 use crate::sampler::Sampler;
@@ -33,11 +33,11 @@ pub struct Pass<'a> {
 }
 
 impl<'a> Pass<'a> {
-    /// The pass over `scene`'s selected parameters.
-    pub fn new(scene: &'a Scene) -> Self {
+    /// The pass over `scene`'s selected parameters, moving shapes' points by the field `velocity`.
+    pub fn new(scene: &'a Scene, velocity: VelocityField) -> Self {
         Self {
             scene,
-            attach: SceneAttach::new(scene),
+            attach: SceneAttach::new(scene, velocity),
         }
     }
 }
@@ -157,11 +157,12 @@ where
 pub fn term_images<S: Directions>(
     scene: &Scene,
     count: usize,
-    render: &RenderOptions,
+    options: &DiffOptions,
     samples: u64,
     term: &impl BoundaryTerm,
     coverage: bool,
 ) -> (Vec<Image>, Vec<Image>, RenderStats) {
+    let render = &options.render;
     let mut radiance = Vec::with_capacity(count);
     let mut covered = Vec::with_capacity(if coverage { count } else { 0 });
     let mut stats = RenderStats::default();
@@ -171,7 +172,7 @@ pub fn term_images<S: Directions>(
         let mut c = vec![Image::new(w, h); if coverage { width } else { 0 }];
         let s = run_term::<S, _>(
             term,
-            &Pass::new(windowed),
+            &Pass::new(windowed, options.velocity),
             samples,
             render,
             |_| SplatFilm::<S>::new(w, h, width),

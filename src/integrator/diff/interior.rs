@@ -93,7 +93,7 @@ where
     let spp = options.render.spp.max(1);
     let seed = options.render.seed;
     let frame32 = scene.camera.frame::<f32>();
-    let attach = SceneAttach::new(scene);
+    let attach = SceneAttach::new(scene, options.velocity);
     let filter = scene.camera.filter;
     driver::run(
         film,

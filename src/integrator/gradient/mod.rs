@@ -191,7 +191,7 @@ fn gradient_with_image(
     stats.absorb(s);
     invalid += interior_film.invalid;
     let (n_primary, n_secondary) = options.boundary.totals(scene, spp);
-    let pass = Pass::new(scene);
+    let pass = Pass::new(scene, options.velocity);
     let mut primary = vec![0.0; n];
     if n_primary > 0 {
         let sources = PrimarySources::of(scene)?;
