@@ -28,7 +28,17 @@
 //!    [`film::write_exr`].
 //!
 //! The entry points that run all four: [`integrator::render`], [`integrator::render_derivatives`] and
-//! [`integrator::loss_gradient`]; [`optimize`] and [`report`] are built on them.
+//! [`integrator::loss_gradient`]; [`optimize`] and [`report`] are built on them. Files (EXR, PNG,
+//! `.npy`, strict JSON) are read and written in [`io`].
+//!
+//! # Adding a kind of node
+//!
+//! Every sdf node kind, emitter kind and material kind declares its fields once, beside its own code
+//! ([`declare::Kind`]); the scene parser, the parameter names, the write-back of values into the scene
+//! JSON and the field rules all work from that declaration. A new primitive is one file (see
+//! `src/sdf/capsule.rs`: its struct, an [`sdf::SdfPrimitive`] implementation, its declaration and a
+//! constructor) plus one line in the sdf module's `primitives!` list; a new emitter or material is its
+//! variant, its code and its declaration in [`emitter`] or [`bsdf`].
 //!
 //! Citations in the documentation: "docs/theory.md §k" is the theory as this repository states it
 //! (`docs/theory.md`, with numbered sections and equations); "supplemental §k, eq. m" is the
