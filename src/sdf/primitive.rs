@@ -47,7 +47,8 @@ macro_rules! primitives {
         $(mod $module;)*
         $(pub use $module::$ty;)*
 
-        /// A primitive kept in a file of its own ([`primitive`](self::primitive)).
+        /// A primitive kept in a file of its own, implementing [`SdfPrimitive`]; each is registered
+        /// with one line in the sdf module's `primitives!` list.
         #[derive(Clone, Debug, PartialEq)]
         pub enum Primitive {
             $(
