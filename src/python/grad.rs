@@ -72,7 +72,7 @@ pub(crate) fn grad<'py>(
         ));
     }
     let options = diff_options(
-        &mut scene,
+        &scene,
         (spp, seed),
         (spp_primary, spp_secondary),
         (normalization, velocity_field),

@@ -119,7 +119,7 @@ pub(crate) fn diff<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut scene = scene.scene.clone();
     let options = diff_options(
-        &mut scene,
+        &scene,
         (spp, seed),
         (spp_primary, spp_secondary),
         (normalization, velocity_field),
