@@ -1,6 +1,6 @@
 //! Surface scattering. Directions point away from the surface; `n` is the outward unit normal.
 
-use crate::declare::{Components, Family, Field, Kind, Rule, Value, on};
+use crate::declare::{Components, Family, Field, Kind, Rule, on};
 use crate::error::{Error, FieldPath};
 use crate::math::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{Frame, Vec3};
@@ -115,15 +115,13 @@ impl Family for Bsdf {
 /// `{"type": "diffuse", "albedo": [r, g, b]}` (each in `[0, 1]`).
 const DIFFUSE: Kind<Bsdf> = Kind {
     type_name: "diffuse",
-    fields: &[Field {
-        key: "albedo",
-        value: Value::Vector {
-            access: on!(Bsdf::Diffuse { albedo } => albedo),
-            components: Components::Rgb,
-            default: None,
-            rule: Rule::UnitInterval,
-        },
-    }],
+    fields: &[Field::vector(
+        "albedo",
+        on!(Bsdf::Diffuse { albedo } => albedo),
+        Components::Rgb,
+        None,
+        Rule::UnitInterval,
+    )],
     blank: || Bsdf::Diffuse {
         albedo: Param3::from(glam::Vec3::ZERO),
     },

@@ -39,6 +39,60 @@ pub struct Field<N: 'static> {
     pub value: Value<N>,
 }
 
+impl<N> Field<N> {
+    /// A number with its default (`None`: required) and rule.
+    pub const fn number(
+        key: &'static str,
+        access: Access<N, Param>,
+        default: Option<f32>,
+        rule: Rule<N>,
+    ) -> Self {
+        Self {
+            key,
+            value: Value::Number {
+                access,
+                default,
+                rule,
+            },
+        }
+    }
+
+    /// Three numbers with their components' names, default (`None`: required) and rule.
+    pub const fn vector(
+        key: &'static str,
+        access: Access<N, Param3>,
+        components: Components,
+        default: Option<f32>,
+        rule: Rule<N>,
+    ) -> Self {
+        Self {
+            key,
+            value: Value::Vector {
+                access,
+                components,
+                default,
+                rule,
+            },
+        }
+    }
+
+    /// A required point `[x, y, z]`, any finite values.
+    pub const fn point(key: &'static str, access: Access<N, Param3>) -> Self {
+        Self::vector(key, access, Components::Xyz, None, Rule::Any)
+    }
+
+    /// A required unit direction, checked only for being non-zero.
+    pub const fn direction(key: &'static str, access: Access<N, glam::Vec3>) -> Self {
+        Self {
+            key,
+            value: Value::Direction {
+                access,
+                after: None,
+            },
+        }
+    }
+}
+
 /// Shared and mutable access to one field of type `T` of a node of type `N` (see [`on!`]).
 pub struct Access<N: 'static, T: 'static> {
     /// The field, read-only.

@@ -558,30 +558,9 @@ impl Family for Emitter {
     }
 }
 
-/// An emitter's `center`.
-const fn center(access: crate::declare::Access<Emitter, Param3>) -> Field<Emitter> {
-    Field {
-        key: "center",
-        value: Value::Vector {
-            access,
-            components: Components::Xyz,
-            default: None,
-            rule: Rule::Any,
-        },
-    }
-}
-
 /// An emitter's `radiance` (linear RGB, `>= 0`).
 const fn radiance(access: crate::declare::Access<Emitter, Param3>) -> Field<Emitter> {
-    Field {
-        key: "radiance",
-        value: Value::Vector {
-            access,
-            components: Components::Rgb,
-            default: None,
-            rule: Rule::NonNegative,
-        },
-    }
+    Field::vector("radiance", access, Components::Rgb, None, Rule::NonNegative)
 }
 
 fn zero3() -> Param3 {
@@ -593,14 +572,8 @@ fn zero3() -> Param3 {
 const RECTANGLE: Kind<Emitter> = Kind {
     type_name: "rectangle",
     fields: &[
-        center(on!(Emitter::Rectangle { center, .. } => center)),
-        Field {
-            key: "normal",
-            value: Value::Direction {
-                access: on!(Emitter::Rectangle { normal, .. } => normal),
-                after: None,
-            },
-        },
+        Field::point("center", on!(Emitter::Rectangle { center, .. } => center)),
+        Field::direction("normal", on!(Emitter::Rectangle { normal, .. } => normal)),
         Field {
             key: "u",
             value: Value::Direction {
@@ -654,15 +627,13 @@ fn in_rectangle_plane(e: &mut Emitter) -> Result<(), String> {
 const SPHERE: Kind<Emitter> = Kind {
     type_name: "sphere",
     fields: &[
-        center(on!(Emitter::Sphere { center, .. } => center)),
-        Field {
-            key: "radius",
-            value: Value::Number {
-                access: on!(Emitter::Sphere { radius, .. } => radius),
-                default: None,
-                rule: Rule::Positive,
-            },
-        },
+        Field::point("center", on!(Emitter::Sphere { center, .. } => center)),
+        Field::number(
+            "radius",
+            on!(Emitter::Sphere { radius, .. } => radius),
+            None,
+            Rule::Positive,
+        ),
         radiance(on!(Emitter::Sphere { radiance, .. } => radiance)),
     ],
     blank: || Emitter::Sphere {

@@ -4,7 +4,7 @@
 
 use super::primitive::SdfPrimitive;
 use super::{Primitive, Sdf};
-use crate::declare::{Components::Xyz, Field, Kind, Rule, Value, on};
+use crate::declare::{Field, Kind, Rule, on};
 use crate::math::{Aabb, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
 
@@ -85,16 +85,14 @@ impl Sdf {
 pub(super) const KIND: Kind<Sdf> = Kind {
     type_name: "capsule",
     fields: &[
-        point("a", on!(Sdf::Primitive(Primitive::Capsule(Capsule { a, .. })) => a)),
-        point("b", on!(Sdf::Primitive(Primitive::Capsule(Capsule { b, .. })) => b)),
-        Field {
-            key: "radius",
-            value: Value::Number {
-                access: on!(Sdf::Primitive(Primitive::Capsule(Capsule { radius, .. })) => radius),
-                default: None,
-                rule: Rule::Positive,
-            },
-        },
+        Field::point("a", on!(Sdf::Primitive(Primitive::Capsule(Capsule { a, .. })) => a)),
+        Field::point("b", on!(Sdf::Primitive(Primitive::Capsule(Capsule { b, .. })) => b)),
+        Field::number(
+            "radius",
+            on!(Sdf::Primitive(Primitive::Capsule(Capsule { radius, .. })) => radius),
+            None,
+            Rule::Positive,
+        ),
     ],
     blank: || {
         let zero = Param3::from(glam::Vec3::ZERO);
@@ -102,15 +100,3 @@ pub(super) const KIND: Kind<Sdf> = Kind {
     },
     example: r#"{"type": "capsule", "a": [-0.5, 0.3, 0], "b": [0.5, 0.3, 0], "radius": 0.3}"#,
 };
-
-const fn point(key: &'static str, access: crate::declare::Access<Sdf, Param3>) -> Field<Sdf> {
-    Field {
-        key,
-        value: Value::Vector {
-            access,
-            components: Xyz,
-            default: None,
-            rule: Rule::Any,
-        },
-    }
-}

@@ -259,14 +259,12 @@ pub(super) mod kinds {
         type_name: "smooth_union",
         fields: &[
             children(on!(Sdf::SmoothUnion { children, .. } => children)),
-            Field {
-                key: "k",
-                value: Value::Number {
-                    access: on!(Sdf::SmoothUnion { k, .. } => k),
-                    default: None,
-                    rule: Rule::Positive,
-                },
-            },
+            Field::number(
+                "k",
+                on!(Sdf::SmoothUnion { k, .. } => k),
+                None,
+                Rule::Positive,
+            ),
         ],
         blank: || Sdf::smooth_union(Vec::new(), 0.0),
         example: concat!(

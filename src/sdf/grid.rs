@@ -528,14 +528,12 @@ pub(super) mod kinds {
                     }),
                 },
             },
-            Field {
-                key: "level",
-                value: Value::Number {
-                    access: on!(Sdf::Grid { level, .. } => level),
-                    default: Some(0.0),
-                    rule: Rule::Any,
-                },
-            },
+            Field::number(
+                "level",
+                on!(Sdf::Grid { level, .. } => level),
+                Some(0.0),
+                Rule::Any,
+            ),
         ],
         blank: || Sdf::Grid {
             data: Arc::new(GridData {

@@ -118,37 +118,9 @@ pub(super) fn cylinder_bounds(
 
 /// The declarations of the primitives' fields ([`crate::declare`]).
 pub(super) mod kinds {
-    use crate::declare::{Components::Xyz, Field, Kind, Rule, Value, on};
-    use crate::scalar::{Param, Param3};
+    use crate::declare::{Components::Xyz, Field, Kind, Rule, on};
+    use crate::scalar::Param3;
     use crate::sdf::Sdf;
-
-    const fn point(key: &'static str, access: crate::declare::Access<Sdf, Param3>) -> Field<Sdf> {
-        Field {
-            key,
-            value: Value::Vector {
-                access,
-                components: Xyz,
-                default: None,
-                rule: Rule::Any,
-            },
-        }
-    }
-
-    const fn number(
-        key: &'static str,
-        access: crate::declare::Access<Sdf, Param>,
-        default: Option<f32>,
-        rule: Rule<Sdf>,
-    ) -> Field<Sdf> {
-        Field {
-            key,
-            value: Value::Number {
-                access,
-                default,
-                rule,
-            },
-        }
-    }
 
     fn zero3() -> Param3 {
         Param3::from(glam::Vec3::ZERO)
@@ -158,8 +130,8 @@ pub(super) mod kinds {
     pub(in crate::sdf) const SPHERE: Kind<Sdf> = Kind {
         type_name: "sphere",
         fields: &[
-            point("center", on!(Sdf::Sphere { center, .. } => center)),
-            number(
+            Field::point("center", on!(Sdf::Sphere { center, .. } => center)),
+            Field::number(
                 "radius",
                 on!(Sdf::Sphere { radius, .. } => radius),
                 None,
@@ -174,17 +146,15 @@ pub(super) mod kinds {
     pub(in crate::sdf) const BOX: Kind<Sdf> = Kind {
         type_name: "box",
         fields: &[
-            point("center", on!(Sdf::Box { center, .. } => center)),
-            Field {
-                key: "half_size",
-                value: Value::Vector {
-                    access: on!(Sdf::Box { half_size, .. } => half_size),
-                    components: Xyz,
-                    default: None,
-                    rule: Rule::Positive,
-                },
-            },
-            number(
+            Field::point("center", on!(Sdf::Box { center, .. } => center)),
+            Field::vector(
+                "half_size",
+                on!(Sdf::Box { half_size, .. } => half_size),
+                Xyz,
+                None,
+                Rule::Positive,
+            ),
+            Field::number(
                 "rounding",
                 on!(Sdf::Box { rounding, .. } => rounding),
                 Some(0.0),
@@ -211,15 +181,9 @@ pub(super) mod kinds {
     pub(in crate::sdf) const TORUS: Kind<Sdf> = Kind {
         type_name: "torus",
         fields: &[
-            point("center", on!(Sdf::Torus { center, .. } => center)),
-            Field {
-                key: "axis",
-                value: Value::Direction {
-                    access: on!(Sdf::Torus { axis, .. } => axis),
-                    after: None,
-                },
-            },
-            number(
+            Field::point("center", on!(Sdf::Torus { center, .. } => center)),
+            Field::direction("axis", on!(Sdf::Torus { axis, .. } => axis)),
+            Field::number(
                 "major_radius",
                 on!(Sdf::Torus { major_radius, .. } => major_radius),
                 None,
@@ -228,7 +192,7 @@ pub(super) mod kinds {
                     text: |n| format!("must be > minor_radius ({})", torus_minor(n)),
                 },
             ),
-            number(
+            Field::number(
                 "minor_radius",
                 on!(Sdf::Torus { minor_radius, .. } => minor_radius),
                 None,
@@ -251,27 +215,21 @@ pub(super) mod kinds {
     pub(in crate::sdf) const CYLINDER: Kind<Sdf> = Kind {
         type_name: "cylinder",
         fields: &[
-            point("center", on!(Sdf::Cylinder { center, .. } => center)),
-            Field {
-                key: "axis",
-                value: Value::Direction {
-                    access: on!(Sdf::Cylinder { axis, .. } => axis),
-                    after: None,
-                },
-            },
-            number(
+            Field::point("center", on!(Sdf::Cylinder { center, .. } => center)),
+            Field::direction("axis", on!(Sdf::Cylinder { axis, .. } => axis)),
+            Field::number(
                 "radius",
                 on!(Sdf::Cylinder { radius, .. } => radius),
                 None,
                 Rule::Positive,
             ),
-            number(
+            Field::number(
                 "half_height",
                 on!(Sdf::Cylinder { half_height, .. } => half_height),
                 None,
                 Rule::Positive,
             ),
-            number(
+            Field::number(
                 "rounding",
                 on!(Sdf::Cylinder { rounding, .. } => rounding),
                 Some(0.0),
@@ -301,14 +259,8 @@ pub(super) mod kinds {
     pub(in crate::sdf) const PLANE: Kind<Sdf> = Kind {
         type_name: "plane",
         fields: &[
-            Field {
-                key: "normal",
-                value: Value::Direction {
-                    access: on!(Sdf::Plane { normal, .. } => normal),
-                    after: None,
-                },
-            },
-            number(
+            Field::direction("normal", on!(Sdf::Plane { normal, .. } => normal)),
+            Field::number(
                 "offset",
                 on!(Sdf::Plane { offset, .. } => offset),
                 None,

@@ -454,15 +454,13 @@ pub(super) mod kinds {
     pub(in crate::sdf) const TRANSFORM: Kind<Sdf> = Kind {
         type_name: "transform",
         fields: &[
-            Field {
-                key: "translate",
-                value: Value::Vector {
-                    access: on!(Sdf::Transform { translate, .. } => translate),
-                    components: Xyz,
-                    default: Some(0.0),
-                    rule: Rule::Any,
-                },
-            },
+            Field::vector(
+                "translate",
+                on!(Sdf::Transform { translate, .. } => translate),
+                Xyz,
+                Some(0.0),
+                Rule::Any,
+            ),
             Field {
                 key: "rotate",
                 value: Value::Rotation {
@@ -470,14 +468,12 @@ pub(super) mod kinds {
                     angle: on!(Sdf::Transform { angle, .. } => angle),
                 },
             },
-            Field {
-                key: "scale",
-                value: Value::Number {
-                    access: on!(Sdf::Transform { scale, .. } => scale),
-                    default: Some(1.0),
-                    rule: Rule::Positive,
-                },
-            },
+            Field::number(
+                "scale",
+                on!(Sdf::Transform { scale, .. } => scale),
+                Some(1.0),
+                Rule::Positive,
+            ),
             Field {
                 key: "child",
                 value: Value::Child(on!(Sdf::Transform { child, .. } => child)),
