@@ -187,7 +187,8 @@ pub enum Value<N: 'static> {
     Child(Access<N, N>),
     /// A non-empty list of child nodes, with prefixes `<prefix>.<key>.<i>` unless named.
     Children(Access<N, Vec<N>>),
-    /// A file, named relative to the scene file's folder, read into the node.
+    /// A file, named relative to the scene file's folder, read into the node once its other fields
+    /// are read and valid (a file can be large).
     File {
         /// Reads the file into the node; the error message (the caller adds the field and the file).
         load: fn(&mut N, &Path) -> Result<(), String>,
