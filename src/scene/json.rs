@@ -411,7 +411,8 @@ impl Context<'_> {
         let o = Obj::new(v, path, &["name", "sdf", "bsdf", "translate"])?;
         let name = o.string("name")?;
         self.name(name, o.at("name"))?;
-        let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?;
+        // Transforms keep the sine and cosine of their angles, computed once the whole tree is read.
+        let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?.refreshed();
         let bsdf = self.bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
         let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
         Ok((name.to_string(), sdf, bsdf, translate))
@@ -427,8 +428,6 @@ impl Context<'_> {
         }
         let mut node = (kind.blank)();
         self.fields(kind, &o, &mut node, Self::sdf)?;
-        // A transform keeps the sine and cosine of its angle, computed from the angle just read.
-        let node = node.refreshed();
         // The name is kept (as a wrapper that delegates everything) because parameter names key on it.
         Ok(match name {
             Some(name) => Sdf::named(name, node),

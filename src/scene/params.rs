@@ -5,7 +5,6 @@
 //! The naming scheme and the order are documented on [`Scene::parameters`].
 
 use super::Scene;
-use crate::camera::Camera;
 use crate::declare;
 use crate::error::{Error, FieldPath, Result, XYZ};
 use crate::scalar::Param;
@@ -22,22 +21,37 @@ pub(super) fn root_prefix(shape: &str, sdf: &Sdf) -> String {
     }
 }
 
-/// Calls `f` with every parameter of the camera (`camera.*`), shared or mutable: the same walk written
-/// once.
-macro_rules! camera_visitor {
-    ($visit:ident $(, $m:tt)?) => {
-        fn $visit(camera: &$($m)? Camera, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+/// Generates the walk over every parameter of a scene in the order of [`Scene::parameters`] (camera,
+/// then each shape's translation, sdf tree and material, then the emitters), for shared or mutable
+/// access: the same walk written once keeps the names of [`Scene::parameters`] and
+/// [`Scene::with_parameter`] identical by construction.
+macro_rules! scene_walk {
+    ($walk:ident, $sdf:ident, $params:ident $(, $m:tt)?) => {
+        fn $walk(scene: &$($m)? Scene, f: &mut dyn FnMut(&str, &$($m)? Param)) {
+            let camera = &$($m)? scene.camera;
             for (field, v) in [("origin", &$($m)? camera.origin), ("target", &$($m)? camera.target), ("up", &$($m)? camera.up)] {
                 for (c, p) in XYZ.iter().zip(&$($m)? v.c) {
                     f(&format!("camera.{field}.{c}"), p);
                 }
             }
             f("camera.fov_y", &$($m)? camera.fov_y);
+            for s in &$($m)? scene.shapes {
+                let name = &s.name;
+                for (c, p) in XYZ.iter().zip(&$($m)? s.translate.c) {
+                    f(&format!("{name}.translate.{c}"), p);
+                }
+                let root = root_prefix(name, &s.sdf);
+                s.sdf.$sdf(&root, f);
+                declare::$params(&$($m)? s.bsdf, name, f);
+            }
+            for e in &$($m)? scene.emitters {
+                declare::$params(&$($m)? e.emitter, &e.name, f);
+            }
         }
     };
 }
-camera_visitor!(camera_params);
-camera_visitor!(camera_params_mut, mut);
+scene_walk!(scene_params, visit_params, params);
+scene_walk!(scene_params_mut, visit_params_mut, params_mut, mut);
 
 impl Sdf {
     /// Calls `f` with the full name and value of every parameter in the tree under this node, whose
@@ -58,38 +72,14 @@ impl Scene {
     /// Calls `f` with the full name and value of every parameter (see [`Scene::parameters`] for the
     /// names), in the order of [`Scene::parameters`].
     pub fn visit_params(&self, f: &mut dyn FnMut(&str, &Param)) {
-        camera_params(&self.camera, f);
-        for s in &self.shapes {
-            let name = &s.name;
-            let translate = &s.translate;
-            for (c, p) in XYZ.iter().zip(&translate.c) {
-                f(&format!("{name}.translate.{c}"), p);
-            }
-            s.sdf.visit_params(&root_prefix(name, &s.sdf), f);
-            declare::params(&s.bsdf, name, f);
-        }
-        for e in &self.emitters {
-            declare::params(&e.emitter, &e.name, f);
-        }
+        scene_params(self, f);
     }
 
     /// [`Scene::visit_params`] with mutable access. Changing a value this way does not update derived
     /// data (bounds, Lipschitz bounds, tolerance): use [`Scene::with_parameter`] for that. Changing slots
     /// is what [`Scene::select_parameters`] does.
     pub fn visit_params_mut(&mut self, f: &mut dyn FnMut(&str, &mut Param)) {
-        camera_params_mut(&mut self.camera, f);
-        for s in &mut self.shapes {
-            let name = &s.name;
-            for (c, p) in XYZ.iter().zip(&mut s.translate.c) {
-                f(&format!("{name}.translate.{c}"), p);
-            }
-            let root = root_prefix(name, &s.sdf);
-            s.sdf.visit_params_mut(&root, f);
-            declare::params_mut(&mut s.bsdf, name, f);
-        }
-        for e in &mut self.emitters {
-            declare::params_mut(&mut e.emitter, &e.name, f);
-        }
+        scene_params_mut(self, f);
     }
 
     /// Every parameter with its current value, in a stable order (camera, shapes, emitters).

@@ -69,20 +69,11 @@ impl AngleTrig {
 /// Recomputes the [`AngleTrig`] of every transform under `sdf` from its angle's current value (after
 /// parameters were set in place).
 pub(super) fn refresh_trig(sdf: &mut Sdf) {
-    match sdf {
-        Sdf::Transform {
-            angle, trig, child, ..
-        } => {
+    crate::declare::walk_mut(sdf, "", &mut |_, node| {
+        if let Sdf::Transform { angle, trig, .. } = node {
             *trig = AngleTrig::of(angle.value);
-            refresh_trig(child);
         }
-        Sdf::Union(children)
-        | Sdf::Intersection(children)
-        | Sdf::Difference(children)
-        | Sdf::SmoothUnion { children, .. } => children.iter_mut().for_each(refresh_trig),
-        Sdf::Named { child, .. } => refresh_trig(child),
-        _ => {}
-    }
+    });
 }
 
 /// The rotation of a [`Similarity`]: the angle's cosine and sine, and the sine the inverse rotation
