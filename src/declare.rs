@@ -128,6 +128,9 @@ pub type Adjust<N> = fn(&mut N) -> Result<(), String>;
 /// rule.
 pub type Check<N> = fn(&N) -> Result<(), String>;
 
+/// Component names of a pair ([`Value::Pair`]).
+pub const PAIR: [&str; 2] = ["x", "y"];
+
 /// What a field holds.
 pub enum Value<N: 'static> {
     /// A number: parameter `<prefix>.<key>`.
@@ -340,7 +343,7 @@ macro_rules! walks {
                     }
                     Value::Pair { access, .. } => {
                         let v = (access.$get)(node);
-                        for (c, p) in ["x", "y"].iter().zip(v) {
+                        for (c, p) in PAIR.iter().zip(v) {
                             f(&format!("{prefix}.{key}.{c}"), p);
                         }
                     }
@@ -400,7 +403,7 @@ pub fn violations<N: Family>(node: &N, at: FieldPath) -> Vec<Error> {
                 Value::Pair { access, rule } if rule.is_relation() == relations => {
                     for (i, p) in (access.get)(node).iter().enumerate() {
                         let ok = rule.allows(node, p.value);
-                        let field = at.element(key, i, &crate::error::XYZ);
+                        let field = at.element(key, i, &PAIR);
                         at.check(&mut out, ok, field, &rule.text(node), p.value);
                     }
                 }

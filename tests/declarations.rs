@@ -4,7 +4,7 @@
 //! themselves, so a kind added later is covered without editing this test.
 
 use implicit_psdr::bsdf::Bsdf;
-use implicit_psdr::declare::{Family, Kind, Rule, Value};
+use implicit_psdr::declare::{Family, Kind, PAIR, Rule, Value};
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::scene::patch::{patched_scene_json, scene_text};
 use implicit_psdr::scene::{Scene, parse};
@@ -94,7 +94,7 @@ fn declared_parameters<N>(kind: &Kind<N>, prefix: &str) -> Vec<String> {
             Value::Vector { components, .. } => {
                 (components.names().iter()).for_each(|c| out.push(format!("{prefix}.{key}.{c}")))
             }
-            Value::Pair { .. } => ["x", "y"]
+            Value::Pair { .. } => PAIR
                 .iter()
                 .for_each(|c| out.push(format!("{prefix}.{key}.{c}"))),
             Value::Rotation { .. } => out.push(format!("{prefix}.angle")),
@@ -162,7 +162,7 @@ fn check_kind<N: Family>(kind: &Kind<N>, place: Place, dir: &Path, node: fn(&Sce
             Value::Vector {
                 rule, components, ..
             } => (rule, components.names().map(|c| format!(".{c}")).to_vec()),
-            Value::Pair { rule, .. } => (rule, vec![".x".into(), ".y".into()]),
+            Value::Pair { rule, .. } => (rule, PAIR.map(|c| format!(".{c}")).to_vec()),
             _ => continue,
         };
         for (i, suffix) in components.iter().enumerate() {

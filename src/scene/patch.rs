@@ -269,7 +269,7 @@ impl Walk<'_> {
                     default,
                     ..
                 } => self.vector(o, key, p, components.names(), *default)?,
-                declare::Value::Pair { .. } => self.vector(o, key, p, &["x", "y"], None)?,
+                declare::Value::Pair { .. } => self.vector(o, key, p, &declare::PAIR, None)?,
                 declare::Value::Rotation { .. } => self.rotation_angle(o, key, p, path)?,
                 declare::Value::Child(_) => {
                     let child_path = format!("{path}.{key}");
