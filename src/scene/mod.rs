@@ -230,8 +230,9 @@ impl Scene {
         } else {
             (camera.target.value() - camera.origin.value()).length()
         };
+        // Delta lights are neither: no ray meets them.
         let finite_emitters: Vec<usize> = (0..emitters.len())
-            .filter(|&i| !emitters[i].emitter.is_infinite())
+            .filter(|&i| !emitters[i].emitter.is_infinite() && !emitters[i].emitter.is_delta())
             .collect();
         let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
         let trace = TraceSettings {
