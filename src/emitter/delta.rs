@@ -77,6 +77,21 @@ impl Emitter {
         }
     }
 
+    /// The point of the light's ray through the attached point `x` at depth `depth`, generic: from a
+    /// point light at attached position `y`, `y + depth·(x − y)/|x − y|` (`depth` from the light);
+    /// along the sun's direction `ω(π)`, `x − depth·ω` (`depth` back from `x`). The shadow edge's
+    /// tangency residual is the occluder's `φ` there (the secondary term of delta lights). `x` itself
+    /// for other emitters.
+    pub fn ray_point<S: Scalar>(&self, y: Vec3<S>, x: Vec3<S>, depth: f32) -> Vec3<S> {
+        match self {
+            Emitter::Point { .. } => y + (x - y).normalize_or_zero() * S::constant(depth),
+            Emitter::Directional { direction, .. } => {
+                x - direction.get::<S>().normalize_or_zero() * S::constant(depth)
+            }
+            _ => x,
+        }
+    }
+
     /// Next-event "sampling" of a delta light from `reference`: the one direction towards it, density
     /// 1 (a delta), the light's position as `p` (for the sun `reference + wi`) and `dist` (infinite for
     /// the sun); `None` at a point light's own position or for a zero direction.
