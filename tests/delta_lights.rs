@@ -396,3 +396,17 @@ fn bad_lights_name_the_field() {
         "emitters[0]",
     );
 }
+
+/// `--set` (a parameter update) that zeroes the sun's direction is refused, naming the component.
+#[test]
+fn zeroing_the_direction_by_a_parameter_is_refused() {
+    let sun = r#"{"name": "sun", "type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]}"#;
+    let scene = ball_on_floor(8, sun, DIRECT);
+    let e = scene.with_parameter("sun.direction.y", 0.0).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("sun.direction.x: must be part of a non-zero direction, got 0"),
+        "{e}"
+    );
+    assert!(scene.with_parameter("sun.direction.y", 0.5).is_ok());
+}
