@@ -4,7 +4,7 @@
 //! Everything that depends on the kind of emitter lives here (sampling, intersection, how a point on it
 //! moves with its parameters, its outline, the scene rules on its fields), so a new kind is added in
 //! this folder rather than in every consumer: its variant and code here or in a file of its own, its
-//! declaration in [`kinds`].
+//! declaration in `kinds.rs`.
 
 pub mod delta;
 mod kinds;

@@ -7,7 +7,7 @@
 //!
 //! **Extraction and sampling** are those of any curve `{f = 0, g = 0}` ([`crate::math::implicit_curve`], whose
 //! module notes state the cases and the density), with `f = φ`, `g = ψ` and boxes culled by
-//! [`classify_box`]: [`silhouette_boxes`] gives boxes certified to hold every curve point.
+//! [`classify_box`](crate::integrator::silhouette_boxes::classify_box): [`silhouette_boxes`](crate::integrator::silhouette_boxes::silhouette_boxes) gives boxes certified to hold every curve point.
 //!
 //! **Frame.** The curve is extracted and sampled in the shape's own frame, its `translate` removed
 //! ([`SilhouetteCurve::origin`]): there the coordinates have the magnitude of the shape, and `φ`, `ψ`
