@@ -1,5 +1,5 @@
 //! The hard shadow edges of delta lights (a point light, the sun; [`crate::emitter::delta`]): their
-//! part of the secondary boundary term (docs/theory.md §5, §9).
+//! part of the secondary boundary term (docs/theory.md §5.7).
 //!
 //! # The integral, in the light's directions
 //!
@@ -34,9 +34,9 @@
 //! `v` the angular normal velocity of `Γ` relative to the direction of the attached receiver point
 //! `x_D(π)` seen from the attached light `y(π)`. In the receiver's own terms this is the secondary
 //! term's `Δf V_∂ dℓ(x_D)`: `Δf = −W f I |n_D·ω| / |y x_D|²` and `V_∂ dℓ(x_D) = v dℓ_ω |y x_D|² / |n_D·ω|`
-//! (the area swept on the receiver), whose product is (3); the perspective change of measure from the
-//! occluder's curve to the receiver's (supplemental eq. 15, `|y x_D| / (|y x_B| sin θ_D)` for the
-//! component across the segment) cancels against the same factors.
+//! (the area swept on the receiver), whose product is (3): the perspective change of measure from the
+//! occluder's curve to the receiver's (docs/theory.md eq. 4.7, supplemental eq. 15 corrected) and the
+//! receiver's cosine and distance cancel.
 //!
 //! **The sun.** Light travelling along the unit `ω` with irradiance `E` (on a surface facing it):
 //! `I_j = ∫ dA(x) W f E |n·ω| V`, and with `dA⊥ = |n·ω| dA` the area across the beam,
