@@ -27,6 +27,23 @@ const CASES: &[(&str, &str, &[&str])] = &[
         &["render", "--spp", "4"],
     ),
     ("render_grid", "grid.json", &["render", "--spp", "2"]),
+    ("render_lights", "lights.json", &["render", "--spp", "2"]),
+    (
+        "diff_lights",
+        "lights.json",
+        &[
+            "diff",
+            "--terms",
+            "--spp",
+            "2",
+            "--param",
+            "ball.center.x",
+            "--param",
+            "bulb.position.y",
+            "--param",
+            "sun.direction.x",
+        ],
+    ),
     (
         "diff_sphere_floor",
         "sphere_floor.json",

@@ -106,6 +106,7 @@ fn emitted_dual_matches_central_difference() {
                     Emitter::Rectangle { radiance, .. }
                     | Emitter::Sphere { radiance, .. }
                     | Emitter::Constant { radiance } => *radiance = Param3::new(rr),
+                    _ => unreachable!("radiance emitters only"),
                 }
                 e.emitted::<f32>(v(p), v(nrm), v(w)).get(k)
             };
@@ -134,6 +135,7 @@ fn emitted_dual_matches_central_difference() {
                 Emitter::Constant { .. } => Emitter::Constant {
                     radiance: Param3::new(radiance),
                 },
+                _ => unreachable!("radiance emitters only"),
             };
             let dp = plain.emitted::<Dual32>(lift_component(p, k), v(nrm), v(w));
             assert_eq!(dp.get(k).eps, 0.0);

@@ -206,6 +206,9 @@ pub fn sample_light(
     }
     let k = ((u_pick * count as f32) as usize).min(count - 1);
     let emitter = &scene.emitters[k].emitter;
+    if emitter.is_delta() {
+        return sample_delta_light(scene, from, shape, k, p, n, wo, counters);
+    }
     let es = emitter.sample_li(p, u)?;
     let bsdf = &scene.shapes[shape].bsdf;
     let bsdf_pdf = bsdf.pdf(n, wo, es.wi);
@@ -247,6 +250,55 @@ pub fn sample_light(
         n: es.n,
         pdf,
         mis: power_heuristic(pdf_w, bsdf_pdf),
+    })
+}
+
+/// The next-event "sample" of delta light `k` (chosen with probability `1/count`) from the scattering
+/// point `p` (normal `n`, outgoing `wo`, shape `shape`): the one direction towards it, tested for
+/// visibility; density `1/count` standing for the delta, MIS weight 1 (no BSDF-sampled ray reaches a
+/// delta light, [`crate::emitter::delta`]).
+#[allow(clippy::too_many_arguments)]
+fn sample_delta_light(
+    scene: &Scene,
+    from: usize,
+    shape: usize,
+    k: usize,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    wo: glam::Vec3,
+    counters: &mut TraceCounters,
+) -> Option<LightVertex> {
+    let es = scene.emitters[k].emitter.sample_delta_li(p)?;
+    let f = scene.shapes[shape]
+        .bsdf
+        .eval::<f32>(n.into(), es.wi.into(), wo.into());
+    if f.x <= 0.0 && f.y <= 0.0 && f.z <= 0.0 {
+        return None;
+    }
+    let o = scene.offset_origin(shape, p, n, es.wi);
+    let t_max = if es.dist.is_finite() {
+        (es.p - o).dot(es.wi)
+    } else {
+        f32::INFINITY
+    };
+    let ray = Ray::new(o, es.wi);
+    if occluded(
+        scene,
+        &ray,
+        t_max,
+        None,
+        scene.leaving(shape, n, es.wi),
+        counters,
+    ) {
+        return None;
+    }
+    Some(LightVertex {
+        from,
+        emitter: k,
+        p: es.p,
+        n: es.n,
+        pdf: 1.0 / scene.emitters.len() as f32,
+        mis: 1.0,
     })
 }
 
@@ -500,7 +552,13 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
                 while let Some(l) = lights.next_if(|l| l.from == i) {
                     let emitter = &scene.emitters[l.emitter].emitter;
                     let bsdf = &scene.shapes[s].bsdf;
-                    let contrib = if emitter.is_infinite() {
+                    let contrib = if emitter.is_delta() {
+                        // A point light's position is attached (it may move); the sun's direction
+                        // is the emitter's own parameter.
+                        let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n).x;
+                        let a = emitter.delta_arrival(x, y);
+                        bsdf.eval(n, a.wi, wo) * (abs_cos(n, a.wi) / l.pdf) * a.irradiance
+                    } else if emitter.is_infinite() {
                         let w = Vec3::<S>::constant(l.p);
                         bsdf.eval(n, w, wo) * (abs_cos(n, w) / l.pdf) * emitter.emitted(x, -w, -w)
                     } else {

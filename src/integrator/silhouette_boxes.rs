@@ -9,6 +9,11 @@
 //! number about twice as many per level, their volume about a quarter.
 //!
 //! The shape's rigid `translate` is honoured by evaluating through [`Shape::eval`] in world coordinates.
+//!
+//! **Seen along a direction.** A delta light's shadow edges are the silhouettes seen from its position
+//! (a point light: the perspective case above) or along its direction (the sun: orthographic,
+//! [`View::Along`]), where `ψ(x) = ∇φ(x)·(−ω)` with `ω` the unit direction the light travels: the same
+//! curve with `c − x` replaced by the constant `−ω`, and `∇ψ = H(−ω)` without the `−∇φ` term.
 
 use crate::error::{Error, Result};
 use crate::math::implicit_curve::octree_leaves;
@@ -27,8 +32,41 @@ pub enum BoxClass {
     Kept,
 }
 
+/// Where a silhouette is seen from.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum View {
+    /// From a point (a camera centre, a point light): perspective.
+    Point(glam::Vec3),
+    /// Along a unit direction `ω` (the way the sun's light travels): orthographic.
+    Along(glam::Vec3),
+}
+
+impl View {
+    /// The vector `e(x)` of `ψ = ∇φ·e`: `c − x` from a point, `−ω` along a direction.
+    #[inline]
+    pub fn towards(self, x: glam::Vec3) -> glam::Vec3 {
+        match self {
+            View::Point(c) => c - x,
+            View::Along(w) => -w,
+        }
+    }
+
+    /// The same view in a frame whose origin is at `origin` (a point moves, a direction does not).
+    pub fn relative_to(self, origin: glam::Vec3) -> View {
+        match self {
+            View::Point(c) => View::Point(c - origin),
+            View::Along(w) => View::Along(w),
+        }
+    }
+}
+
 /// Classify the world-space box `b` for the silhouette of `shape` seen from `eye`.
 pub fn classify_box(shape: &Shape, eye: glam::Vec3, b: &Aabb) -> BoxClass {
+    classify_box_in(shape, View::Point(eye), b)
+}
+
+/// [`classify_box`] for any [`View`].
+pub fn classify_box_in(shape: &Shape, view: View, b: &Aabb) -> BoxClass {
     // The plain interval first: a quarter of the cost, and it settles most of the empty space.
     let x = Vec3::new(
         Interval::from_f32(b.min.x, b.max.x),
@@ -43,7 +81,12 @@ pub fn classify_box(shape: &Shape, eye: glam::Vec3, b: &Aabb) -> BoxClass {
         return BoxClass::NoSurface;
     }
     let psi = (0..3).fold(Interval::ZERO, |acc, k| {
-        let to_eye = Interval::point(eye[k] as f64) - Interval::from_f32(b.min[k], b.max[k]);
+        let to_eye = match view {
+            View::Point(eye) => {
+                Interval::point(eye[k] as f64) - Interval::from_f32(b.min[k], b.max[k])
+            }
+            View::Along(w) => Interval::point(-w[k] as f64),
+        };
         acc + phi.g[k] * to_eye
     });
     if !psi.contains_zero() {
@@ -66,6 +109,16 @@ pub fn silhouette_boxes(
     max_depth: u32,
     min_size: f32,
 ) -> Result<Vec<Aabb>> {
+    silhouette_boxes_in(shape, View::Point(eye), max_depth, min_size)
+}
+
+/// [`silhouette_boxes`] for any [`View`].
+pub fn silhouette_boxes_in(
+    shape: &Shape,
+    view: View,
+    max_depth: u32,
+    min_size: f32,
+) -> Result<Vec<Aabb>> {
     let root = shape.bounds;
     if root.is_empty() {
         return Ok(Vec::new());
@@ -77,6 +130,6 @@ pub fn silhouette_boxes(
         )));
     }
     Ok(octree_leaves(root, max_depth, min_size, |b| {
-        classify_box(shape, eye, b) == BoxClass::Kept
+        classify_box_in(shape, view, b) == BoxClass::Kept
     }))
 }

@@ -7,7 +7,7 @@
 //!
 //! **Extraction and sampling** are those of any curve `{f = 0, g = 0}` ([`crate::math::implicit_curve`], whose
 //! module notes state the cases and the density), with `f = φ`, `g = ψ` and boxes culled by
-//! [`classify_box`]: [`silhouette_boxes`] gives boxes certified to hold every curve point.
+//! [`classify_box`](crate::integrator::silhouette_boxes::classify_box): [`silhouette_boxes`](crate::integrator::silhouette_boxes::silhouette_boxes) gives boxes certified to hold every curve point.
 //!
 //! **Frame.** The curve is extracted and sampled in the shape's own frame, its `translate` removed
 //! ([`SilhouetteCurve::origin`]): there the coordinates have the magnitude of the shape, and `φ`, `ψ`
@@ -18,9 +18,12 @@
 //!
 //! **Density.** A sample's density per unit length of the true curve is `|T·t| / L`, `t` the direction of
 //! the polyline segment it came from and `L` the polyline's total length ([`CurveSample::pdf`]).
+//!
+//! **Seen along a direction** ([`View::Along`], a sun's shadow edges): `ψ(x) = ∇φ(x)·(−ω)`,
+//! `∇ψ = −Hω`; everything else is the same ([`extract_silhouette_in`]).
 
 use crate::error::Result;
-use crate::integrator::silhouette_boxes::{BoxClass, classify_box, silhouette_boxes};
+use crate::integrator::silhouette_boxes::{BoxClass, classify_box_in, silhouette_boxes_in};
 use crate::math::Aabb;
 use crate::math::implicit_curve::{CurveFunctions, Polyline, extract_polyline, project_from_chord};
 use crate::scalar::Param3;
@@ -28,13 +31,14 @@ use crate::scene::Shape;
 use crate::sdf::Sdf;
 use glam::Vec3;
 
+pub use crate::integrator::silhouette_boxes::View;
 pub use crate::math::implicit_curve::{CurveOptions, ExtractStats};
 
 /// The extracted silhouette: a polyline whose vertices lie on the curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SilhouetteCurve {
-    /// The camera centre the curve is the silhouette for.
-    pub eye: Vec3,
+    /// Where the curve is the silhouette seen from (in world space): the camera centre, a light.
+    pub view: View,
     /// The curve: vertices on `{φ = 0, ψ = 0}` up to the Newton tolerance, relative to `origin` (the
     /// frame the curve is extracted and sampled in, at the float resolution of the shape's own size;
     /// world positions: [`SilhouetteCurve::world_points`]), and the extraction's counters.
@@ -59,15 +63,25 @@ pub struct CurveSample {
 
 /// `φ`, `ψ` and their gradients at `x` (world space, translation included).
 pub fn silhouette_functions(shape: &Shape, eye: Vec3, x: Vec3) -> (f32, f32, Vec3, Vec3) {
-    let t = shape.translate.value();
-    functions_in_frame(&shape.sdf, eye - t, x - t)
+    silhouette_functions_in(shape, View::Point(eye), x)
 }
 
-/// [`silhouette_functions`] in the shape's own frame (its translation removed from `eye` and `x`).
-fn functions_in_frame(sdf: &Sdf, eye: Vec3, x: Vec3) -> (f32, f32, Vec3, Vec3) {
+/// [`silhouette_functions`] for any [`View`].
+pub fn silhouette_functions_in(shape: &Shape, view: View, x: Vec3) -> (f32, f32, Vec3, Vec3) {
+    let t = shape.translate.value();
+    functions_in_frame(&shape.sdf, view.relative_to(t), x - t)
+}
+
+/// [`silhouette_functions_in`] in the shape's own frame (its translation removed from the view and
+/// `x`).
+fn functions_in_frame(sdf: &Sdf, view: View, x: Vec3) -> (f32, f32, Vec3, Vec3) {
     let (phi, g, h) = sdf.hessian(x);
-    let v = eye - x;
-    (phi, g.dot(v), g, h * v - g)
+    let v = view.towards(x);
+    let grad_psi = match view {
+        View::Point(_) => h * v - g,
+        View::Along(_) => h * v,
+    };
+    (phi, g.dot(v), g, grad_psi)
 }
 
 /// `shape` with its translation removed, and that translation: the frame the curve is extracted in.
@@ -85,7 +99,7 @@ fn own_frame(shape: &Shape) -> (Shape, Vec3) {
 /// The silhouette's pair `(φ, ψ)` seen from `eye`, in the shape's own frame (see [`own_frame`]).
 struct SilhouetteFunctions<'a> {
     sdf: &'a Sdf,
-    eye: Vec3,
+    view: View,
     /// The shape in its own frame, whose boxes [`classify_box`] culls; `None` when only projecting
     /// (sampling never culls).
     cull: Option<&'a Shape>,
@@ -93,23 +107,26 @@ struct SilhouetteFunctions<'a> {
 
 impl CurveFunctions for SilhouetteFunctions<'_> {
     fn eval(&self, x: Vec3) -> (f32, f32, Vec3, Vec3) {
-        functions_in_frame(self.sdf, self.eye, x)
+        functions_in_frame(self.sdf, self.view, x)
     }
 
     fn values(&self, p: Vec3) -> (f32, f32) {
-        (self.sdf.eval_f32(p), self.sdf.gradient(p).dot(self.eye - p))
+        (
+            self.sdf.eval_f32(p),
+            self.sdf.gradient(p).dot(self.view.towards(p)),
+        )
     }
 
     fn may_hold(&self, b: &Aabb) -> bool {
-        (self.cull).is_none_or(|shape| classify_box(shape, self.eye, b) == BoxClass::Kept)
+        (self.cull).is_none_or(|shape| classify_box_in(shape, self.view, b) == BoxClass::Kept)
     }
 
-    /// `|φ| ≤ 1e-5·scale`, `|ψ| ≤ 1e-5·|∇φ||c − x|·scale`, `scale = max(1, |x|)`; typically the residuals
-    /// are at their rounding floor, ~1e-7.
+    /// `|φ| ≤ 1e-5·scale`, `|ψ| ≤ 1e-5·|∇φ||e(x)|·scale`, `scale = max(1, |x|)` (`e = c − x`, or
+    /// the unit `−ω` along a direction); typically the residuals are at their rounding floor, ~1e-7.
     fn converged(&self, x: Vec3, phi: f32, psi: f32, gphi: Vec3, _: Vec3) -> bool {
         let scale = x.length().max(1.0);
         phi.abs() <= 1e-5 * scale
-            && psi.abs() <= 1e-5 * scale * gphi.length() * (self.eye - x).length()
+            && psi.abs() <= 1e-5 * scale * gphi.length() * self.view.towards(x).length()
     }
 }
 
@@ -120,21 +137,29 @@ pub fn extract_silhouette(
     eye: Vec3,
     options: &CurveOptions,
 ) -> Result<SilhouetteCurve> {
-    let world_eye = eye;
+    extract_silhouette_in(shape, View::Point(eye), options)
+}
+
+/// [`extract_silhouette`] for any [`View`]: from a point or along a direction.
+pub fn extract_silhouette_in(
+    shape: &Shape,
+    view: View,
+    options: &CurveOptions,
+) -> Result<SilhouetteCurve> {
     let (own, origin) = own_frame(shape);
-    let (shape, eye) = (&own, eye - origin);
-    let boxes = silhouette_boxes(shape, eye, options.max_depth, 0.0)?;
+    let (shape, local) = (&own, view.relative_to(origin));
+    let boxes = silhouette_boxes_in(shape, local, options.max_depth, 0.0)?;
     let polyline = extract_polyline(
         &SilhouetteFunctions {
             sdf: &shape.sdf,
-            eye,
+            view: local,
             cull: Some(shape),
         },
         &boxes,
         options,
     );
     Ok(SilhouetteCurve {
-        eye: world_eye,
+        view,
         polyline,
         origin,
     })
@@ -167,7 +192,7 @@ impl SilhouetteCurve {
         // In the frame the curve was extracted in (see `own_frame`).
         let fns = SilhouetteFunctions {
             sdf: &shape.sdf,
-            eye: self.eye - self.origin,
+            view: self.view.relative_to(self.origin),
             cull: None,
         };
         let p = project_from_chord(&fns, chord, u[1])?;

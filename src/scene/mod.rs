@@ -232,8 +232,9 @@ impl Scene {
         } else {
             (camera.target.value() - camera.origin.value()).length()
         };
+        // Delta lights are neither: no ray meets them.
         let finite_emitters: Vec<usize> = (0..emitters.len())
-            .filter(|&i| !emitters[i].emitter.is_infinite())
+            .filter(|&i| !emitters[i].emitter.is_infinite() && !emitters[i].emitter.is_delta())
             .collect();
         let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
         let trace = TraceSettings {
@@ -281,12 +282,27 @@ impl Scene {
     }
 
     /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, reason)`
-    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children): derivatives that move those curves (any
-    /// geometric parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children; and under a point or directional
+    /// light every crease, whose hard shadow edges the delta lights' term does not sample):
+    /// derivatives that move those curves (any geometric parameter of the scene, through the camera,
+    /// the lights or the shape) miss those terms.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
+        let delta = self.emitters.iter().any(|e| e.emitter.is_delta());
         self.shapes
             .iter()
-            .filter_map(|s| s.sdf.unsampled_creases().map(|r| (s.name.clone(), r)))
+            .filter_map(|s| {
+                let under_delta = || {
+                    (s.sdf.creases())
+                        .map(|r| format!("{r}, its shadows from point and directional lights"))
+                };
+                let reason = s.sdf.unsampled_creases();
+                let reason = if delta {
+                    reason.or_else(under_delta)
+                } else {
+                    reason
+                };
+                reason.map(|r| (s.name.clone(), r))
+            })
             .collect()
     }
 

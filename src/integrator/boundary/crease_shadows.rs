@@ -43,18 +43,23 @@ pub const CREASE_SHADOW_STREAM: u64 = 0x5ADE_C2EA;
 /// The probability `P_u` of drawing the direction uniformly on the sphere (eq. (1)).
 pub const UNIFORM_SHARE: f32 = 0.5;
 
+/// The emitters a direction can be drawn towards: all but the delta lights, which no direction found
+/// by sampling a sphere of directions reaches (their hard shadows are [`super::delta_shadows`]'s).
+fn steering_emitters(scene: &Scene) -> impl Iterator<Item = &crate::emitter::Emitter> {
+    (scene.emitters.iter())
+        .map(|e| &e.emitter)
+        .filter(|e| !e.is_delta())
+}
+
 /// The density (1) of direction `w` from `x`: uniform share plus the emitters' solid-angle densities.
 fn direction_pdf(scene: &Scene, x: glam::Vec3, w: glam::Vec3) -> f32 {
-    let n = scene.emitters.len();
+    let n = steering_emitters(scene).count();
     if n == 0 {
         return UNIFORM_SPHERE_PDF;
     }
     let ray = Ray::new(x, w);
-    let towards: f32 = scene
-        .emitters
-        .iter()
+    let towards: f32 = steering_emitters(scene)
         .map(|e| {
-            let e = &e.emitter;
             if e.is_infinite() {
                 e.pdf_li(x, w, x + w, -w)
             } else {
@@ -73,14 +78,14 @@ pub(crate) fn sample_direction(
     x: glam::Vec3,
     sampler: &mut Sampler,
 ) -> Option<(glam::Vec3, f32)> {
-    let n = scene.emitters.len();
+    let n = steering_emitters(scene).count();
     let pick = sampler.next_1d();
     let u = sampler.next_2d();
     let w = if n == 0 || pick < UNIFORM_SHARE {
         uniform_sphere(u)
     } else {
         let k = (((pick - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE) * n as f32) as usize).min(n - 1);
-        scene.emitters[k].emitter.sample_li(x, u)?.wi
+        steering_emitters(scene).nth(k)?.sample_li(x, u)?.wi
     };
     let pdf = direction_pdf(scene, x, w);
     (pdf > 0.0 && pdf.is_finite()).then_some((w, pdf))

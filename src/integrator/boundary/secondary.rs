@@ -117,12 +117,14 @@
 //! **Scope.** Both integrators. The same estimator serves segments passing the crease edges of sharp
 //! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, [`super::shadow_segment`], for any
 //! occluder); [`SecondarySources`] shares the samples between them and the tear of creased surfaces at
-//! later vertices ([`super::crease_tears`]). Not included: the primary boundary (silhouettes seen from the camera,
+//! later vertices ([`super::crease_tears`]), and the hard shadow edges of delta lights, whose
+//! segments start at the light ([`super::delta_shadows`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
 //! the creases of hard CSG between unbounded children.
 
 use super::crease_shadows::CreaseShadows;
 use super::crease_tears::CreaseTears;
+use super::delta_shadows::DeltaShadows;
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::{Occluder, segment};
 use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch, term_images};
@@ -192,9 +194,10 @@ pub(crate) fn secondary_term(
 }
 
 /// Everything the secondary term samples, prepared once per render: the tangent lines of smooth
-/// silhouettes (this module), lines past crease edges ([`super::crease_shadows`]) and the tear of
-/// creased surfaces at vertices after the first ([`super::crease_tears`]), which share its samples
-/// equally (those the scene has no occluder for take no share).
+/// silhouettes (this module), lines past crease edges ([`super::crease_shadows`]), the tear of
+/// creased surfaces at vertices after the first ([`super::crease_tears`]) and the hard shadow edges
+/// of delta lights ([`super::delta_shadows`]), which share its samples equally (those the scene has no
+/// occluder or light for take no share).
 pub struct SecondarySources {
     /// Tangent lines of curved shapes.
     pub silhouettes: SilhouetteShadows,
@@ -202,6 +205,8 @@ pub struct SecondarySources {
     pub crease_shadows: CreaseShadows,
     /// The tear of creased surfaces.
     pub crease_tears: CreaseTears,
+    /// The silhouettes seen from delta lights.
+    pub delta_shadows: DeltaShadows,
 }
 
 impl SecondarySources {
@@ -214,13 +219,19 @@ impl SecondarySources {
             silhouettes: SilhouetteShadows::of(scene, tangent),
             crease_shadows,
             crease_tears,
+            delta_shadows: DeltaShadows::of(scene),
         }
     }
 }
 
 impl BoundaryTerm for SecondarySources {
     fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
-        vec![&self.silhouettes, &self.crease_shadows, &self.crease_tears]
+        vec![
+            &self.silhouettes,
+            &self.crease_shadows,
+            &self.crease_tears,
+            &self.delta_shadows,
+        ]
     }
 }
 

@@ -104,7 +104,7 @@ enum End {
 
 /// The random numbers of the subpaths of one oriented segment: a stream keyed on the bits of `x_B` and
 /// `x_S` ([`super::secondary`]'s module docs, "Random numbers").
-fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
+pub(crate) fn subpath_sampler(x_b: glam::Vec3, x_s: glam::Vec3) -> Sampler {
     let bits = |p: glam::Vec3| {
         (p.x.to_bits() as u64 | (p.y.to_bits() as u64) << 32)
             ^ (p.z.to_bits() as u64).rotate_left(17)

@@ -257,7 +257,8 @@ impl TangentSampler {
         let mut targets = Vec::new();
         let mut environment = 0.0;
         if mode == TangentSampling::Steered {
-            for emitter in emitters {
+            // Delta lights are at no point a tangent line could reach.
+            for emitter in emitters.into_iter().filter(|e| !e.is_delta()) {
                 let l = luminance(emitter.radiance().value());
                 match emitter.geometry() {
                     Some(g) if l > 0.0 => targets.push((g, l)),

@@ -1,10 +1,16 @@
-//! Light sources: a one-sided rectangle, a sphere and a constant environment.
+//! Light sources: a one-sided rectangle, a sphere, a constant environment, and the delta lights (a
+//! point light and a directional sun, [`delta`]).
 //!
 //! Everything that depends on the kind of emitter lives here (sampling, intersection, how a point on it
 //! moves with its parameters, its outline, the scene rules on its fields), so a new kind is added in
-//! this file and the scene parser rather than in every consumer.
+//! this folder rather than in every consumer: its variant and code here or in a file of its own, its
+//! declaration in `kinds.rs`.
 
-use crate::declare::{Components, Family, Field, Kind, Rule, Value, on};
+pub mod delta;
+mod kinds;
+
+pub use delta::Arrival;
+
 use crate::error::{Error, FieldPath};
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
 use crate::math::{Aabb, Frame, Ray, Vec3};
@@ -40,6 +46,21 @@ pub enum Emitter {
     Constant {
         /// Radiance.
         radiance: Param3,
+    },
+    /// A point light (a delta light, [`delta`]): reached by shadow rays only.
+    Point {
+        /// Position.
+        position: Param3,
+        /// Radiant intensity (linear RGB, W/sr).
+        intensity: Param3,
+    },
+    /// A directional light, the sun (a delta light at infinity, [`delta`]).
+    Directional {
+        /// The direction the light travels (non-zero; normalised where it is used, so a derivative
+        /// along it is 0).
+        direction: Param3,
+        /// Irradiance on a surface facing the light (linear RGB, W/m²).
+        irradiance: Param3,
     },
 }
 
@@ -132,16 +153,18 @@ fn one_minus_cos_max(sin2: f32) -> f32 {
 }
 
 impl Emitter {
-    /// The emitted radiance.
+    /// The emitted radiance; a point light's intensity, a sun's irradiance.
     pub fn radiance(&self) -> &Param3 {
         match self {
             Emitter::Rectangle { radiance, .. }
             | Emitter::Sphere { radiance, .. }
             | Emitter::Constant { radiance } => radiance,
+            Emitter::Point { intensity, .. } => intensity,
+            Emitter::Directional { irradiance, .. } => irradiance,
         }
     }
 
-    /// The primal geometry of a finite emitter; `None` for the environment.
+    /// The primal geometry of a finite emitter; `None` for the environment and delta lights.
     pub fn geometry(&self) -> Option<Geometry> {
         match self {
             Emitter::Rectangle {
@@ -161,12 +184,13 @@ impl Emitter {
                 center: center.value(),
                 radius: radius.value,
             }),
-            Emitter::Constant { .. } => None,
+            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
         }
     }
 
-    /// Whether a selected parameter (one with a derivative slot) moves or resizes the emitter; its
-    /// radiance does not.
+    /// Whether a selected parameter (one with a derivative slot) moves or resizes the emitter (a point
+    /// light's position included); its radiance does not. A sun's direction is not a place: it is
+    /// read from the parameter where it is used ([`Emitter::delta_arrival`]).
     pub fn geometry_selected(&self) -> bool {
         let sel = |p: &Param| p.slot.is_some();
         match self {
@@ -174,15 +198,16 @@ impl Emitter {
                 center.c.iter().any(sel) || size.iter().any(sel)
             }
             Emitter::Sphere { center, radius, .. } => center.c.iter().any(sel) || sel(radius),
-            Emitter::Constant { .. } => false,
+            Emitter::Point { position, .. } => position.c.iter().any(sel),
+            Emitter::Constant { .. } | Emitter::Directional { .. } => false,
         }
     }
 
     /// The point `p` of this finite emitter carried along by its parameters, generic: it keeps its
     /// relative position (a rectangle's fractional coordinates along `u` and `v`, a sphere's direction
     /// from the centre) as the emitter moves and scales. Returned with a generic quantity proportional
-    /// to the area (`a·b`, `r²`) whose derivative over its value is the area element's. `None` for the
-    /// environment, which has no points.
+    /// to the area (`a·b`, `r²`) whose derivative over its value is the area element's. A point light's
+    /// position, with 1. `None` for the environment and the sun, which have no points.
     pub fn attach<S: Scalar>(&self, p: glam::Vec3) -> Option<(Vec3<S>, S)> {
         match self {
             Emitter::Rectangle {
@@ -208,7 +233,8 @@ impl Emitter {
                 let x = center.get::<S>() + Vec3::constant(dir) * r_s;
                 Some((x, r_s * r_s))
             }
-            Emitter::Constant { .. } => None,
+            Emitter::Point { position, .. } => Some((position.get::<S>(), S::one())),
+            Emitter::Constant { .. } | Emitter::Directional { .. } => None,
         }
     }
 
@@ -272,16 +298,18 @@ impl Emitter {
         crate::declare::violations(self, at)
     }
 
-    /// Surface area of a finite emitter (`∞` for the environment).
+    /// Surface area of a finite emitter (`∞` for the environment, 0 for delta lights).
     pub fn area(&self) -> f32 {
         match self {
             Emitter::Rectangle { size, .. } => size[0].value * size[1].value,
             Emitter::Sphere { radius, .. } => 4.0 * PI * radius.value * radius.value,
             Emitter::Constant { .. } => f32::INFINITY,
+            Emitter::Point { .. } | Emitter::Directional { .. } => 0.0,
         }
     }
 
-    /// Nearest intersection `(t, outward normal)` of `ray` with a finite emitter in `(0, t_max)`.
+    /// Nearest intersection `(t, outward normal)` of `ray` with a finite emitter in `(0, t_max)`; `None`
+    /// for delta lights, which no ray hits.
     ///
     /// Both sides of a rectangle block rays; its returned normal is always the emitting side's `normal`.
     #[inline]
@@ -338,7 +366,7 @@ impl Emitter {
                 let n = (ray.at(t) - c).normalize_or_zero();
                 Some((t, n))
             }
-            Emitter::Constant { .. } => None,
+            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
         }
     }
 
@@ -350,6 +378,8 @@ impl Emitter {
     ///   uniform by area from inside.
     /// - Constant: uniform over the sphere of directions (`1 / 4π`): `sample_li` does not know the
     ///   surface normal, so it cannot favour the upper hemisphere.
+    /// - Delta lights: the one direction towards the light, `pdf` 1 standing for the delta
+    ///   ([`delta`]).
     #[inline]
     pub fn sample_li(&self, reference: glam::Vec3, u: glam::Vec2) -> Option<EmitterSample> {
         match self {
@@ -428,6 +458,7 @@ impl Emitter {
                     pdf: UNIFORM_SPHERE_PDF,
                 })
             }
+            Emitter::Point { .. } | Emitter::Directional { .. } => self.sample_delta_li(reference),
         }
     }
 
@@ -460,7 +491,8 @@ impl Emitter {
     }
 
     /// Density per steradian of [`Emitter::sample_li`] from `reference` to the point `p` (normal `n`) it
-    /// would have produced (`p` ignored for the environment, where `wi` alone matters).
+    /// would have produced (`p` ignored for the environment, where `wi` alone matters). 0 for delta
+    /// lights: no direction found by other means reaches them.
     #[inline]
     pub fn pdf_li(
         &self,
@@ -492,13 +524,15 @@ impl Emitter {
                 if pdf.is_finite() { pdf } else { 0.0 }
             }
             Emitter::Constant { .. } => UNIFORM_SPHERE_PDF,
+            Emitter::Point { .. } | Emitter::Directional { .. } => 0.0,
         }
     }
 
     /// Radiance leaving point `p` (normal `n`) in direction `w` (away from the emitter), generic.
     ///
     /// Finite emitters emit on the side of `n` only; the side test looks at primal values (its jump is a
-    /// visibility-like discontinuity handled by boundary terms).
+    /// visibility-like discontinuity handled by boundary terms). Delta lights have no radiance
+    /// (their light is [`Emitter::delta_arrival`]).
     #[inline]
     pub fn emitted<S: Scalar>(&self, p: Vec3<S>, n: Vec3<S>, w: Vec3<S>) -> Vec3<S> {
         let _ = p;
@@ -511,10 +545,11 @@ impl Emitter {
                 }
             }
             Emitter::Constant { radiance } => radiance.get::<S>(),
+            Emitter::Point { .. } | Emitter::Directional { .. } => Vec3::zero(),
         }
     }
 
-    /// Box around a finite emitter; `None` for the environment.
+    /// Box around a finite emitter; `None` for the environment and delta lights.
     pub fn bounds(&self) -> Option<Aabb> {
         match self {
             Emitter::Rectangle {
@@ -532,122 +567,12 @@ impl Emitter {
                 center.value(),
                 glam::Vec3::splat(radius.value),
             )),
-            Emitter::Constant { .. } => None,
+            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
         }
     }
-    /// True for emitters at infinity.
+    /// True for the environment emitter: radiance arriving from infinity along every direction (the
+    /// sun, a delta light at infinity, is not one: see [`Emitter::is_delta`]).
     pub fn is_infinite(&self) -> bool {
         matches!(self, Emitter::Constant { .. })
     }
 }
-
-/// Every emitter kind ([`crate::declare`]), in the order the scene file's errors list them.
-const KINDS: &[&Kind<Emitter>] = &[&RECTANGLE, &SPHERE, &CONSTANT];
-
-impl Family for Emitter {
-    fn kinds() -> &'static [&'static Kind<Emitter>] {
-        KINDS
-    }
-
-    fn kind(&self) -> &'static Kind<Emitter> {
-        match self {
-            Emitter::Rectangle { .. } => &RECTANGLE,
-            Emitter::Sphere { .. } => &SPHERE,
-            Emitter::Constant { .. } => &CONSTANT,
-        }
-    }
-}
-
-/// An emitter's `radiance` (linear RGB, `>= 0`).
-const fn radiance(access: crate::declare::Access<Emitter, Param3>) -> Field<Emitter> {
-    Field::vector("radiance", access, Components::Rgb, None, Rule::NonNegative)
-}
-
-fn zero3() -> Param3 {
-    Param3::from(glam::Vec3::ZERO)
-}
-
-/// `{"type": "rectangle", "name", "center", "normal", "u", "size": [along u, along normal × u],
-/// "radiance"}`.
-const RECTANGLE: Kind<Emitter> = Kind {
-    type_name: "rectangle",
-    fields: &[
-        Field::point("center", on!(Emitter::Rectangle { center, .. } => center)),
-        Field::direction("normal", on!(Emitter::Rectangle { normal, .. } => normal)),
-        Field {
-            key: "u",
-            value: Value::Direction {
-                access: on!(Emitter::Rectangle { u, .. } => u),
-                after: Some(in_rectangle_plane),
-            },
-        },
-        Field {
-            key: "size",
-            value: Value::Pair {
-                access: on!(Emitter::Rectangle { size, .. } => size),
-                rule: Rule::Positive,
-            },
-        },
-        radiance(on!(Emitter::Rectangle { radiance, .. } => radiance)),
-    ],
-    blank: || Emitter::Rectangle {
-        center: zero3(),
-        normal: glam::Vec3::Y,
-        u: glam::Vec3::X,
-        size: [Param::new(0.0), Param::new(0.0)],
-        radiance: zero3(),
-    },
-    example: r#"{"type": "rectangle", "name": "example", "center": [0, 3, 0], "normal": [0, -1, 0], "u": [1, 0, 0], "size": [1, 0.5], "radiance": [5, 5, 5]}"#,
-};
-
-/// Gram–Schmidt: keeps the rectangle in the plane given by `normal`, with its first edge as close to
-/// the given `u` as possible. A `u` within ~0.06° of the normal has no such direction.
-fn in_rectangle_plane(e: &mut Emitter) -> Result<(), String> {
-    let Emitter::Rectangle { normal, u, .. } = e else {
-        unreachable!("a rectangle's rule")
-    };
-    let u_perp = *u - *normal * normal.dot(*u);
-    match u_perp.try_normalize().filter(|_| u_perp.length() > 1e-3) {
-        Some(v) => {
-            *u = v;
-            Ok(())
-        }
-        None => {
-            let fmt = |v: glam::Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
-            Err(format!(
-                "must not be parallel to normal {}, got {}",
-                fmt(*normal),
-                fmt(*u)
-            ))
-        }
-    }
-}
-
-/// `{"type": "sphere", "name", "center", "radius", "radiance"}`.
-const SPHERE: Kind<Emitter> = Kind {
-    type_name: "sphere",
-    fields: &[
-        Field::point("center", on!(Emitter::Sphere { center, .. } => center)),
-        Field::number(
-            "radius",
-            on!(Emitter::Sphere { radius, .. } => radius),
-            None,
-            Rule::Positive,
-        ),
-        radiance(on!(Emitter::Sphere { radiance, .. } => radiance)),
-    ],
-    blank: || Emitter::Sphere {
-        center: zero3(),
-        radius: Param::new(0.0),
-        radiance: zero3(),
-    },
-    example: r#"{"type": "sphere", "name": "example", "center": [1.5, 3, 2], "radius": 0.3, "radiance": [30, 30, 30]}"#,
-};
-
-/// `{"type": "constant", "name", "radiance"}`: radiance arriving from every direction.
-const CONSTANT: Kind<Emitter> = Kind {
-    type_name: "constant",
-    fields: &[radiance(on!(Emitter::Constant { radiance } => radiance))],
-    blank: || Emitter::Constant { radiance: zero3() },
-    example: r#"{"type": "constant", "name": "example", "radiance": [0.3, 0.3, 0.3]}"#,
-};
