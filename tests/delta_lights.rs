@@ -258,7 +258,7 @@ fn reverse_mode_equals_forward_mode() {
     use implicit_psdr::integrator::{self, GradientLayout, render_gradient};
     let two_lights = format!("{BULB}, {SUN}");
     for integrator in [DIRECT, PATH] {
-        let mut scene = ball_on_floor(16, &two_lights, integrator);
+        let scene = ball_on_floor(16, &two_lights, integrator);
         let params: Vec<String> = [
             "ball.center.x",
             "bulb.position.y",
@@ -269,7 +269,7 @@ fn reverse_mode_equals_forward_mode() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-        let layout = GradientLayout::select(&mut scene, &params, &[]).unwrap();
+        let layout = GradientLayout::select(&scene, &params, &[]).unwrap();
         let mut options = diff_options(4, 7);
         options.boundary.primary_spp = Some(2);
         options.boundary.secondary_spp = Some(8);
@@ -277,7 +277,9 @@ fn reverse_mode_equals_forward_mode() {
         for (i, v) in adjoint.rgb.iter_mut().enumerate() {
             *v = ((i * 7919) % 13) as f32 / 6.0 - 1.0;
         }
-        let forward = integrator::render_derivatives(&scene, params.len(), &options).unwrap();
+        let forward =
+            integrator::render_derivatives(&scene, &scene.select(&params).unwrap(), &options)
+                .unwrap();
         let reverse = render_gradient(&scene, &layout, &adjoint, &options).unwrap();
         let dot = |a: &implicit_psdr::film::Image| -> f64 {
             (a.rgb.iter().zip(&adjoint.rgb))
