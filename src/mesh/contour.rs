@@ -270,7 +270,8 @@ mod tests {
         };
         let mesh = dual_contour(&Ball, &lattice);
         assert!(mesh.faces.len() > 100);
-        assert_eq!(mesh.open_edges(), 0);
+        assert_eq!(mesh.boundary_edges(), 0);
+        assert_eq!(mesh.non_manifold_edges(), 0);
         assert_eq!(mesh.euler_characteristic(), 2);
         for v in &mesh.vertices {
             assert!(Ball.value(*v).abs() < 1e-5, "{v}");

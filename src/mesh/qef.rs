@@ -96,11 +96,9 @@ pub(crate) fn symmetric_eigen(a: DMat3) -> (DVec3, DMat3) {
                 row[p] = c * a - s * b;
                 row[q] = s * a + c * b;
             }
-            for k in 0..3 {
-                let (a, b) = (m[p][k], m[q][k]);
-                m[p][k] = c * a - s * b;
-                m[q][k] = s * a + c * b;
-            }
+            let (row_p, row_q) = (m[p], m[q]);
+            m[p] = std::array::from_fn(|k| c * row_p[k] - s * row_q[k]);
+            m[q] = std::array::from_fn(|k| s * row_p[k] + c * row_q[k]);
             for row in &mut v {
                 let (a, b) = (row[p], row[q]);
                 row[p] = c * a - s * b;
