@@ -56,6 +56,7 @@ pub mod film;
 pub mod integrator;
 pub mod io;
 pub mod math;
+pub mod mesh;
 pub mod optimize;
 #[cfg(feature = "python")]
 mod python;

@@ -1,12 +1,13 @@
 //! File formats, in one place: OpenEXR ([`exr`]) and PNG ([`png`]) images, NumPy `.npy` grids
-//! ([`npy`]), JSON read strictly (`json`: the base of the scene and `OPT.json` readers), and output
-//! files written whole or not at all ([`files`]).
+//! ([`npy`]), PLY and OBJ triangle meshes ([`mesh`]), JSON read strictly (`json`: the base of the
+//! scene and `OPT.json` readers), and output files written whole or not at all ([`files`]).
 //!
 //! Rendering types never see a file: the scene reader, the film and the grids call these at the edge.
 
 pub mod exr;
 pub mod files;
 pub(crate) mod json;
+pub mod mesh;
 pub mod npy;
 pub mod png;
 
@@ -15,5 +16,6 @@ pub use files::{
     Writer, bytes_writer, check_output_path, file_message, file_name, write_all_or_nothing,
     write_exr_and_png,
 };
+pub use mesh::{MESH_EXTENSIONS, write_mesh};
 pub use npy::{read_npy, write_npy};
 pub use png::{srgb_encode, write_png};

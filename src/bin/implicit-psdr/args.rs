@@ -52,6 +52,10 @@ pub(crate) enum Command {
     /// Sample one shape's SDF over its bounds (padded) into a grid and write it as a float32 .npy of
     /// shape [nz, ny, nx].
     Bake(BakeArgs),
+    /// Extract one shape's surface (a grid's at its level) as a closed triangle mesh by dual
+    /// contouring (sharp edges kept sharp, vertices on the surface, normals from the gradient), in
+    /// scene coordinates, to a binary PLY or an OBJ (by the extension).
+    Mesh(MeshArgs),
     /// List every differentiable parameter of a scene with its value, one `name value` per line
     /// (angles in degrees, so derivatives with respect to them are per degree), and each grid node's
     /// values once, after the node's `level`, as `NODE.values [nz, ny, nx] (N values; ...)` (the
@@ -108,6 +112,21 @@ pub(crate) struct BakeArgs {
     /// Output .npy file.
     #[arg(long)]
     pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct MeshArgs {
+    /// The scene file holding the shape.
+    pub(crate) scene: PathBuf,
+    /// Name of the shape.
+    #[arg(long)]
+    pub(crate) shape: String,
+    /// Lattice points along the longest side of the shape's box (4 to 1024); cells are near-cubic.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=1024))]
+    pub(crate) res: u32,
+    /// Output mesh, `.ply` (binary) or `.obj` [default: SHAPE.ply].
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
 }
 
 /// How a derivative is estimated besides the samples of the image, shared by `diff` and `grad`.

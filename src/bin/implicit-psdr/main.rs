@@ -22,6 +22,7 @@ mod bake;
 mod diff;
 mod fd;
 mod grad;
+mod mesh;
 mod optimize;
 mod params;
 mod render;
@@ -86,6 +87,7 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render { scene, outputs } => render::render(&scene, &outputs),
         Command::Bake(args) => bake::bake(&args),
+        Command::Mesh(args) => mesh::mesh(&args),
         Command::Params { scene } => params::params(&scene),
         Command::Diff(args) => diff::diff(&args),
         Command::Grad(args) => grad::grad(&args),
