@@ -13,7 +13,9 @@ seed 0, the differentiable pixel normalisation, the default boundary budgets):
 - ``optimize(config, out=None, base_dir=None)``: the run of an ``OPT.json`` (a path or a dict), as the
   ``optimize`` command; returns the rows of its ``progress.csv``, one dict per iteration, and writes
   the command's files in ``out`` if given;
-- ``read_exr(path)``: the channels of an EXR the tool wrote.
+- ``read_exr(path)``: the channels of an EXR the tool wrote;
+- ``extract_mesh(scene, shape, res=128)``: a shape's surface as ``(vertices, faces)`` arrays, the
+  mesh the ``mesh`` command writes.
 
 Arrays are numpy float32: images (height, width, 3) with row 0 at the top, grids (nz, ny, nx).
 Errors in the scene or the request raise ``SceneError`` (a ``ValueError``) with the tool's one-line
@@ -21,6 +23,24 @@ message; malformed arrays raise ``ValueError``. ``implicit_psdr.torch`` wraps a 
 ``torch.autograd.Function``; ``implicit_psdr.ray`` sums gradients over many views as Ray tasks.
 """
 
-from ._native import Scene, SceneError, diff, grad, optimize, read_exr, render
+from ._native import (
+    Scene,
+    SceneError,
+    diff,
+    extract_mesh,
+    grad,
+    optimize,
+    read_exr,
+    render,
+)
 
-__all__ = ["Scene", "SceneError", "diff", "grad", "optimize", "read_exr", "render"]
+__all__ = [
+    "Scene",
+    "SceneError",
+    "diff",
+    "extract_mesh",
+    "grad",
+    "optimize",
+    "read_exr",
+    "render",
+]
