@@ -31,7 +31,9 @@ fn select(scene: &mut Scene, eight: bool) {
     }
     center.c[0].slot = Some(1);
     center.c[1].slot = Some(2);
-    let implicit_psdr::bsdf::Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf;
+    let implicit_psdr::bsdf::Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf else {
+        unreachable!("the scene is diffuse")
+    };
     albedo.c[0].slot = Some(3);
     scene.shapes[1].translate.c[1].slot = Some(4);
     if let Emitter::Rectangle {

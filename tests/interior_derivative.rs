@@ -71,7 +71,9 @@ fn sphere_scene(which: SphereParam, value: f32, select: bool) -> Scene {
         radius.slot = slot(SphereParam::Radius);
     }
     let mut bsdf = diffuse([v(SphereParam::AlbedoR, 0.7), 0.5, 0.3]);
-    let Bsdf::Diffuse { albedo } = &mut bsdf;
+    let Bsdf::Diffuse { albedo } = &mut bsdf else {
+        unreachable!("built as diffuse")
+    };
     albedo.c[0].slot = slot(SphereParam::AlbedoR);
     let mut light = rectangle(
         [0.8, v(SphereParam::LightY, 3.0), 1.0],
@@ -313,7 +315,9 @@ fn dual32_and_dual8_agree() {
         center.c[1].slot = Some(1);
     }
     scene.camera.origin.c[0].slot = Some(2);
-    let Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf;
+    let Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf else {
+        unreachable!("the scene is diffuse")
+    };
     albedo.c[1].slot = Some(3);
     let o = options(4, 11, Normalization::Fixed);
     let one = render_interior_in::<Dual32>(&scene, 4, &o).unwrap();
