@@ -20,7 +20,7 @@
 //! cos θi` tends to zero as `wi` grazes (through `G1`), so the one-sided cut adds no discontinuity
 //! of its own to the integrand.
 
-use super::microfacet::{self, d, g1, sample_visible};
+use super::microfacet::{d, g1, sample_visible};
 use super::{BLANK, Bsdf, BsdfSample, fresnel};
 use crate::declare::{Components, Field, Kind, Rule, on};
 use crate::math::{Frame, Vec3};
@@ -117,7 +117,7 @@ impl RoughConductor {
             return 0.0;
         }
         let alpha = self.alpha.value;
-        microfacet::d(alpha, n.dot(h), n.cross(h).length_squared())
+        d(alpha, n.dot(h), n.cross(h).length_squared())
             * g1(alpha, co, n.cross(wo).length_squared(), oh)
             / (4.0 * co)
     }
