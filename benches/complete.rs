@@ -19,7 +19,7 @@ use implicit_psdr::integrator::{
 };
 use implicit_psdr::integrator::{RenderOptions, render};
 use implicit_psdr::report::{self, DEFAULT_BUDGET, Estimator, summary};
-use implicit_psdr::scene::{Scene, load};
+use implicit_psdr::scene::{Scene, Selection, load};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
@@ -46,11 +46,12 @@ fn options(spp: u32, seed: u64) -> DiffOptions {
 }
 
 /// The complete derivative with `spp` camera samples and `boost` times `diff`'s default boundary budgets.
-fn complete(scene: &Scene, spp: u32, seed: u64, boost: u64) -> Image {
+fn complete(scene: &Scene, selection: &Selection, spp: u32, seed: u64, boost: u64) -> Image {
     let pixels = (scene.camera.width * scene.camera.height) as u64;
     let (p, s) = BoundaryBudget::default().resolve(spp);
     let (primary, secondary) = (boost * p as u64 * pixels, boost * s as u64 * pixels);
-    let out = render_derivatives_with_boundary(scene, 1, &options(spp, seed), primary, secondary)
+    let options = options(spp, seed);
+    let out = render_derivatives_with_boundary(scene, selection, &options, primary, secondary)
         .expect("the default scene supports every term");
     out.total().remove(0)
 }
@@ -61,8 +62,9 @@ fn main() {
         .find_map(|a| a.parse().ok())
         .unwrap_or(5);
     let plain = default_scene();
-    let mut one = default_scene();
-    one.select_parameters(&["ball.radius".to_string()]).unwrap();
+    let one = plain
+        .select(&["ball.radius"])
+        .expect("the default scene has a ball");
     let spp = 64;
     let render_options = options(spp, 0).render;
     black_box(render(&plain, &render_options));
@@ -72,13 +74,13 @@ fn main() {
         black_box(render(&plain, &render_options));
         tp.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_interior(&one, 1, &options(spp, 0)).unwrap());
+        black_box(render_interior(&plain, &one, &options(spp, 0)).unwrap());
         ti.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(complete(&one, spp, 0, 1));
+        black_box(complete(&plain, &one, spp, 0, 1));
         tc.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(complete(&one, spp, 0, 4));
+        black_box(complete(&plain, &one, spp, 0, 4));
         t4.push(t.elapsed().as_secs_f64());
     }
     let (p, i, c, c4) = (median(tp), median(ti), median(tc), median(t4));

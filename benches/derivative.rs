@@ -5,11 +5,9 @@
 //!
 //! `cargo bench --bench derivative [-- REPS]`.
 
-use implicit_psdr::emitter::Emitter;
 use implicit_psdr::integrator::{DiffOptions, Normalization, render_interior};
 use implicit_psdr::integrator::{RenderOptions, render};
 use implicit_psdr::scene::{Scene, load};
-use implicit_psdr::sdf::Sdf;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
@@ -19,32 +17,17 @@ fn default_scene() -> Scene {
     load(&path).expect("the default scene parses")
 }
 
-/// `ball.radius` in slot 0; with `eight`, also ball.center.x|y, ball.albedo.r, floor.translate.y,
-/// light.center.y, light.radiance.r and camera.origin.x in slots 1..8.
-fn select(scene: &mut Scene, eight: bool) {
-    let Sdf::Sphere { center, radius } = &mut scene.shapes[0].sdf else {
-        panic!("the default scene's first shape is the ball");
-    };
-    radius.slot = Some(0);
-    if !eight {
-        return;
-    }
-    center.c[0].slot = Some(1);
-    center.c[1].slot = Some(2);
-    let implicit_psdr::bsdf::Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf else {
-        unreachable!("the scene is diffuse")
-    };
-    albedo.c[0].slot = Some(3);
-    scene.shapes[1].translate.c[1].slot = Some(4);
-    if let Emitter::Rectangle {
-        center, radiance, ..
-    } = &mut scene.emitters[0].emitter
-    {
-        center.c[1].slot = Some(5);
-        radiance.c[0].slot = Some(6);
-    }
-    scene.camera.origin.c[0].slot = Some(7);
-}
+/// The eight parameters of the eight-direction pass; the one-direction pass takes the first.
+const EIGHT: [&str; 8] = [
+    "ball.radius",
+    "ball.center.x",
+    "ball.center.y",
+    "ball.albedo.r",
+    "floor.translate.y",
+    "light.center.y",
+    "light.radiance.r",
+    "camera.origin.x",
+];
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -68,10 +51,8 @@ fn main() {
         ..Default::default()
     };
     let plain = default_scene();
-    let mut one = default_scene();
-    select(&mut one, false);
-    let mut eight = default_scene();
-    select(&mut eight, true);
+    let one = plain.select(&EIGHT[..1]).expect("the parameters exist");
+    let eight = plain.select(&EIGHT).expect("the parameters exist");
     // Warm-up (thread pool, caches).
     black_box(render(&plain, &render_options));
     let (mut tp, mut t1, mut t8, mut t8d) = (vec![], vec![], vec![], vec![]);
@@ -80,17 +61,17 @@ fn main() {
         black_box(render(&plain, &render_options));
         tp.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_interior(&one, 1, &options).unwrap());
+        black_box(render_interior(&plain, &one, &options).unwrap());
         t1.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        black_box(render_interior(&eight, 8, &options).unwrap());
+        black_box(render_interior(&plain, &eight, &options).unwrap());
         t8.push(t.elapsed().as_secs_f64());
         let o = DiffOptions {
             normalization: Normalization::Differentiable,
             ..options.clone()
         };
         let t = Instant::now();
-        black_box(render_interior(&eight, 8, &o).unwrap());
+        black_box(render_interior(&plain, &eight, &o).unwrap());
         t8d.push(t.elapsed().as_secs_f64());
     }
     let (p, d1, d8, d8d) = (median(tp), median(t1), median(t8), median(t8d));

@@ -86,11 +86,11 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(5);
-    let mut scene = scene_with_32_cubed_grid();
+    let scene = scene_with_32_cubed_grid();
     let spp = scene.spp;
     let params: Vec<String> = PARAMS.iter().map(|s| s.to_string()).collect();
-    let layout = GradientLayout::select(&mut scene, &params, &[GRID.to_string()])
-        .expect("the parameters exist");
+    let layout =
+        GradientLayout::select(&scene, &params, &[GRID.to_string()]).expect("the parameters exist");
     let options = |seed: u64, boundary: BoundaryBudget| DiffOptions {
         render: RenderOptions {
             spp,

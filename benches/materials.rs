@@ -12,12 +12,11 @@ use implicit_psdr::integrator::{
 };
 use implicit_psdr::scalar::{Param, Param3};
 use implicit_psdr::scene::{Scene, load};
-use implicit_psdr::sdf::Sdf;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
-/// The default scene with `integrator`, both shapes made gold when `metal`, `ball.radius` in slot 0.
+/// The default scene with `integrator`, both shapes made gold when `metal`.
 fn scene(integrator: IntegratorKind, metal: bool) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_floor.json");
     let mut scene = load(&path).expect("the default scene parses");
@@ -32,10 +31,6 @@ fn scene(integrator: IntegratorKind, metal: bool) -> Scene {
             });
         }
     }
-    let Sdf::Sphere { radius, .. } = &mut scene.shapes[0].sdf else {
-        panic!("the default scene's first shape is the ball");
-    };
-    radius.slot = Some(0);
     scene
 }
 
@@ -73,6 +68,9 @@ fn main() {
     ] {
         let diffuse = scene(integrator, false);
         let metal = scene(integrator, true);
+        let radius = diffuse
+            .select(&["ball.radius"])
+            .expect("the parameter exists");
         black_box(render(&diffuse, &render_options));
         let mut t = [vec![], vec![], vec![], vec![]];
         for _ in 0..reps {
@@ -83,10 +81,10 @@ fn main() {
                 black_box(render(&metal, &render_options));
             }));
             t[2].push(time(|| {
-                black_box(render_interior(&diffuse, 1, &options).unwrap());
+                black_box(render_interior(&diffuse, &radius, &options).unwrap());
             }));
             t[3].push(time(|| {
-                black_box(render_interior(&metal, 1, &options).unwrap());
+                black_box(render_interior(&metal, &radius, &options).unwrap());
             }));
         }
         let [pd, pm, dd, dm] = t.map(median);

@@ -51,8 +51,7 @@ fn main() -> implicit_psdr::Result<()> {
     };
     let base = scene::load(Path::new(path))?;
     let spp = base.spp;
-    let mut selected = base.clone();
-    selected.select_parameters(&params)?;
+    let selection = base.select(&params)?;
     let references: Vec<Image> = params
         .iter()
         .map(|p| {
@@ -105,7 +104,7 @@ fn main() -> implicit_psdr::Result<()> {
                 boundary: *boundary,
                 ..Default::default()
             };
-            let d = render_derivatives(&selected, params.len(), &options)?;
+            let d = render_derivatives(&base, &selection, &options)?;
             for (k, total) in d.total().iter().enumerate() {
                 let (raw, blurred) = errors(total, &references[k]);
                 table[k][v].0 += raw / 3.0;

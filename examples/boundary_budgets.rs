@@ -43,8 +43,8 @@ fn main() -> implicit_psdr::Result<()> {
             .map(String::from)
             .to_vec()
     };
-    let mut scene = scene::load(Path::new(path))?;
-    scene.select_parameters(&params)?;
+    let scene = scene::load(Path::new(path))?;
+    let selection = scene.select(&params)?;
     let spp = scene.spp;
     println!(
         "{path}: {spp} spp, {}; default budgets {:?} per pixel\n",
@@ -74,7 +74,7 @@ fn main() -> implicit_psdr::Result<()> {
                     ..DiffOptions::default()
                 };
                 let start = Instant::now();
-                renders.push(render_derivatives(&scene, params.len(), &options)?.total());
+                renders.push(render_derivatives(&scene, &selection, &options)?.total());
                 seconds += start.elapsed().as_secs_f64() / (2 * PAIRS) as f64;
             }
             variance += renders[0]

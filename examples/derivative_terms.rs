@@ -21,9 +21,9 @@ fn main() -> implicit_psdr::Result<()> {
         vec!["ball.radius".into(), "light.center.x".into()]
     };
 
-    let mut scene = scene::load(Path::new(scene_path))?;
-    // Parameter k of the list gets derivative slot k.
-    scene.select_parameters(&params)?;
+    let scene = scene::load(Path::new(scene_path))?;
+    // Derivative k is parameter k of the list.
+    let selection = scene.select(&params)?;
     let options = DiffOptions {
         render: RenderOptions {
             spp: 32,
@@ -34,7 +34,7 @@ fn main() -> implicit_psdr::Result<()> {
         // and spp/8 shadow samples per pixel).
         ..DiffOptions::default()
     };
-    let d = render_derivatives(&scene, params.len(), &options)?;
+    let d = render_derivatives(&scene, &selection, &options)?;
 
     let sum = |image: &Image| image.rgb.iter().map(|&v| v as f64).sum::<f64>();
     for (k, p) in params.iter().enumerate() {

@@ -41,8 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let aspect = scene.camera.height as f32 / scene.camera.width as f32;
     scene.camera.width = size;
     scene.camera.height = ((size as f32 * aspect).round() as u32).max(1);
-    let reference = scene.clone();
-    scene.select_parameters(std::slice::from_ref(param))?;
+    let selection = scene.select(std::slice::from_ref(param))?;
     // Four times `diff`'s default boundary budgets: the figure should show each term clearly.
     let (bp, bs) = BoundaryBudget::default().resolve(spp);
     let options = DiffOptions {
@@ -57,14 +56,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         ..DiffOptions::default()
     };
-    let d = render_derivatives(&scene, 1, &options)?;
-    let value = reference
+    let d = render_derivatives(&scene, &selection, &options)?;
+    let value = scene
         .parameters()
         .into_iter()
         .find(|(n, _)| n == param)
         .map_or(1.0, |(_, v)| v);
     let fd = finite_difference(
-        &reference,
+        &scene,
         param,
         0.01 * value.abs().max(1.0),
         &RenderOptions {

@@ -13,7 +13,8 @@
 //! 1. **Scene.** [`scene::load`] parses a scene file into a [`scene::Scene`] (stored in `f32`): its
 //!    [`scene::Shape`]s, each an [`sdf::Sdf`] tree with a material from [`bsdf`]; its emitters
 //!    ([`scene::NamedEmitter`], [`emitter`]); its [`camera::Camera`]. Numbers that can be differentiated
-//!    are [`Param`]s; [`scene::Scene::select_parameters`] chooses which of them carry derivatives.
+//!    are [`Param`]s; [`scene::Scene::select`] returns the [`scene::Selection`] of those that carry
+//!    derivatives, which the estimators take with the scene.
 //! 2. **Tracer**, in `f32`. [`scene::Scene::intersect`] finds a ray's first hit through [`trace`]
 //!    (sphere tracing, closed forms where the answer is certain, [`trace::TraceSettings`] for the
 //!    tolerances); [`integrator::path::trace_path`] records a whole light path as a

@@ -11,8 +11,7 @@ use implicit_psdr::film::{self, Image};
 use implicit_psdr::integrator::{
     self, DiffOptions, GradientLayout, Loss, Normalization, RenderOptions, loss_gradient,
 };
-use implicit_psdr::scalar::GridValues;
-use implicit_psdr::scene;
+use implicit_psdr::scene::{self, GridDirection};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -243,12 +242,12 @@ fn grad_writes_what_the_library_computes() {
     assert!((loss - mse).abs() <= 1e-12 * mse, "{loss} vs {mse}");
 
     // The library, for the same inputs.
-    let mut scene = scene::load(&dir.join("scene.json"))
+    let scene = scene::load(&dir.join("scene.json"))
         .unwrap()
         .with_parameter("ball.albedo.g", 0.5)
         .unwrap();
     let params_wanted = strings(&["ball.radius", "light.center.y"]);
-    let layout = GradientLayout::select(&mut scene, &params_wanted, &strings(&["blob"])).unwrap();
+    let layout = GradientLayout::select(&scene, &params_wanted, &strings(&["blob"])).unwrap();
     let options = options(4, 3, Normalization::Differentiable);
     let want = loss_gradient(&scene, &layout, &target, Loss::L2, &options).unwrap();
     let total = want.gradient.total();
@@ -378,13 +377,19 @@ fn diff_grid_direction_writes_what_the_library_computes() {
     expected.sort();
     assert_eq!(names, expected);
 
-    let mut scene = scene::load(&dir.join("scene.json")).unwrap();
-    scene.select_parameters(&strings(&["ball.radius"])).unwrap();
-    let slot = 1;
-    let u = Arc::new(u);
-    (scene.select_grids(&[("blob".into(), GridValues::Direction { slot, u })])).unwrap();
+    let scene = scene::load(&dir.join("scene.json")).unwrap();
+    let along = GridDirection {
+        node: "blob".into(),
+        shape: SHAPE,
+        values: Arc::new(u),
+        source: "u".into(),
+    };
+    let selection = scene
+        .select_with_grid_directions(&["ball.radius"], &[along])
+        .unwrap();
+    assert_eq!(selection.names(), ["ball.radius", "blob.values"]);
     let options = options(4, 1, Normalization::Differentiable);
-    let want = integrator::render_derivatives(&scene, 2, &options).unwrap();
+    let want = integrator::render_derivatives(&scene, &selection, &options).unwrap();
     let total = want.total();
     let mut nonzero = false;
     for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {

@@ -122,8 +122,7 @@ struct Errors {
 
 /// Complete derivative (default `differentiable` normalisation unless `fixed`) against FD.
 fn compare(base: &Scene, name: &str, h: f32, spp: u32, fixed: bool) -> Errors {
-    let mut scene = base.clone();
-    scene.select_parameters(&[name.to_string()]).unwrap();
+    let selection = base.select(&[name]).unwrap();
     let opts = DiffOptions {
         render: RenderOptions {
             spp,
@@ -137,7 +136,7 @@ fn compare(base: &Scene, name: &str, h: f32, spp: u32, fixed: bool) -> Errors {
         },
         ..Default::default()
     };
-    let out = render_derivatives_with_boundary(&scene, 1, &opts, 100_000, 0).unwrap();
+    let out = render_derivatives_with_boundary(base, &selection, &opts, 100_000, 0).unwrap();
     let total = gray(&out.total()[0]);
     let interior = gray(&out.interior[0]);
     for img in out.total().iter().chain(&out.primary) {
@@ -308,9 +307,9 @@ fn camera_in_the_environment_with_silhouettes_and_outlines() {
 /// Identical bit for bit with 1 and 2 threads, finite, and nonzero for a moving light.
 #[test]
 fn outline_term_is_deterministic() {
-    let mut scene = scene(true, true);
-    scene
-        .select_parameters(&["light.center.y".to_string(), "camera.origin.y".to_string()])
+    let scene = scene(true, true);
+    let two = scene
+        .select(&["light.center.y", "camera.origin.y"])
         .unwrap();
     let opts = DiffOptions {
         render: RenderOptions {
@@ -328,7 +327,7 @@ fn outline_term_is_deterministic() {
             .unwrap()
             .install(|| {
                 implicit_psdr::integrator::boundary::primary::render_primary_terms(
-                    &scene, 2, &opts, 20_000,
+                    &scene, &two, &opts, 20_000,
                 )
                 .unwrap()
             })

@@ -35,8 +35,7 @@ use implicit_psdr::integrator::{
     self, BoundaryBudget, DiffOptions, Gradient, GradientLayout, Loss, RenderOptions,
     loss_gradient, render, render_gradient,
 };
-use implicit_psdr::scalar::GridValues;
-use implicit_psdr::scene::{self, Scene, Shape};
+use implicit_psdr::scene::{self, GridBlock, GridDirection, Scene, Shape};
 use implicit_psdr::sdf::{Sdf, bake_padded, write_npy};
 use std::path::Path;
 use std::sync::Arc;
@@ -104,6 +103,16 @@ fn terms(g: &Gradient) -> [(&'static str, &Vec<f64>); 3] {
         ("primary", &g.primary),
         ("secondary", &g.secondary),
     ]
+}
+
+/// The forward-mode direction `u` of the values of grid `block`.
+fn along(block: &GridBlock, u: Arc<Vec<f32>>) -> GridDirection {
+    GridDirection {
+        node: block.node.clone(),
+        shape: block.shape,
+        values: u,
+        source: "u".into(),
+    }
 }
 
 /// Owned names.
@@ -178,17 +187,18 @@ const DIRECT: &str = r#"{"type": "direct"}"#;
 
 #[test]
 fn named_parameters_match_forward_mode_term_by_term() {
-    let mut scene = small("scenes/sphere_floor.json", 24);
+    let scene = small("scenes/sphere_floor.json", 24);
     let params = names(&[
         "ball.radius",
         "light.center.x",
         "ball.albedo.r",
         "ball.center.y",
     ]);
-    let layout = GradientLayout::select(&mut scene, &params, &[]).unwrap();
+    let layout = GradientLayout::select(&scene, &params, &[]).unwrap();
     let options = options(4, 7, 2, 4, Normalization::default());
     let g = adjoint(24, 24, 3);
-    let forward = integrator::render_derivatives(&scene, params.len(), &options).unwrap();
+    let forward =
+        integrator::render_derivatives(&scene, &scene.select(&params).unwrap(), &options).unwrap();
     let reverse = render_gradient(&scene, &layout, &g, &options).unwrap();
     for (k, name) in params.iter().enumerate() {
         for (term, f, r) in [
@@ -222,7 +232,7 @@ fn crease_edges_match_forward_mode() {
 }
 
 fn crease_edges_case(integrator: &str) {
-    let mut scene = scene::parse(
+    let scene = scene::parse(
         &r#"{
   "camera": {"origin": [0, 1.6, 4], "target": [0, 0, 0], "up": [0, 1, 0],
              "fov_y": 40.0, "width": 20, "height": 20, "filter": "tent"},
@@ -259,10 +269,11 @@ fn crease_edges_case(integrator: &str) {
         "bite.radius",
         "camera.origin.y",
     ]);
-    let layout = GradientLayout::select(&mut scene, &params, &[]).unwrap();
+    let layout = GradientLayout::select(&scene, &params, &[]).unwrap();
     let options = options(4, 7, 2, 4, Normalization::default());
     let g = adjoint(20, 20, 5);
-    let forward = integrator::render_derivatives(&scene, params.len(), &options).unwrap();
+    let forward =
+        integrator::render_derivatives(&scene, &scene.select(&params).unwrap(), &options).unwrap();
     let reverse = render_gradient(&scene, &layout, &g, &options).unwrap();
     for (k, name) in params.iter().enumerate() {
         for (term, f, r) in [
@@ -287,28 +298,18 @@ fn crease_edges_case(integrator: &str) {
 
 #[test]
 fn grid_values_match_a_forward_direction() {
-    let mut scene = small("scenes/grid.json", 24);
+    let scene = small("scenes/grid.json", 24);
     let node = "baked_blob.sdf.child".to_string();
     let params = names(&["ball.radius"]);
     let options = options(4, 5, 2, 4, Normalization::default());
     let g = adjoint(24, 24, 11);
-    let mut reverse_scene = scene.clone();
-    let layout =
-        GradientLayout::select(&mut reverse_scene, &params, std::slice::from_ref(&node)).unwrap();
-    let reverse = render_gradient(&reverse_scene, &layout, &g, &options).unwrap();
+    let layout = GradientLayout::select(&scene, &params, std::slice::from_ref(&node)).unwrap();
+    let reverse = render_gradient(&scene, &layout, &g, &options).unwrap();
     let (block, first) = &layout.grids[0];
     let u = adjoint(block.len() as u32, 1, 99).rgb[..block.len()].to_vec();
-    scene.select_parameters(&params).unwrap();
-    scene
-        .select_grids(&[(
-            node.clone(),
-            GridValues::Direction {
-                slot: 1,
-                u: Arc::new(u.clone()),
-            },
-        )])
-        .unwrap();
-    let forward = integrator::render_derivatives(&scene, 2, &options).unwrap();
+    let along = along(block, Arc::new(u.clone()));
+    let selection = (scene.select_with_grid_directions(&params, &[along])).unwrap();
+    let forward = integrator::render_derivatives(&scene, &selection, &options).unwrap();
     for (term, f, r) in [
         ("interior", &forward.interior, &reverse.interior),
         ("primary", &forward.primary, &reverse.primary),
@@ -366,28 +367,15 @@ fn path_scene_every_entry_matches_forward_direction() {
     let g = adjoint(size, size, 21);
     for norm in [Normalization::Fixed, Normalization::Differentiable] {
         let options = options(4, 31, 2, 4, norm);
-        let mut reverse_scene = base.clone();
-        let layout =
-            GradientLayout::select(&mut reverse_scene, &params, std::slice::from_ref(&node))
-                .unwrap();
+        let layout = GradientLayout::select(&base, &params, std::slice::from_ref(&node)).unwrap();
         let first = layout.grids[0].1;
         assert_eq!(first, params.len());
         let u = direction(layout.entries, 5);
         let u_values = Arc::new(u[first..].to_vec());
-        let reverse = render_gradient(&reverse_scene, &layout, &g, &options).unwrap();
-        let mut forward_scene = base.clone();
-        forward_scene.select_parameters(&params).unwrap();
-        forward_scene
-            .select_grids(&[(
-                node.clone(),
-                GridValues::Direction {
-                    slot: params.len() as u32,
-                    u: u_values.clone(),
-                },
-            )])
-            .unwrap();
-        let forward =
-            integrator::render_derivatives(&forward_scene, params.len() + 1, &options).unwrap();
+        let reverse = render_gradient(&base, &layout, &g, &options).unwrap();
+        let along = along(&layout.grids[0].0, u_values.clone());
+        let selection = (base.select_with_grid_directions(&params, &[along])).unwrap();
+        let forward = integrator::render_derivatives(&base, &selection, &options).unwrap();
         assert_eq!(forward.stats.invalid_derivatives, 0);
         assert_eq!(reverse.stats.invalid_derivatives, 0);
         for (term, f, r) in [
@@ -458,10 +446,10 @@ fn path_scene_every_entry_matches_forward_direction() {
 #[test]
 fn grid_values_sum_to_minus_the_level() {
     let size = 24;
-    let mut scene = with_twin(&grid_scene("level", PATH, size, 10, true));
+    let scene = with_twin(&grid_scene("level", PATH, size, 10, true));
     let params = names(&["blob.level", "ball.radius", "twin.level"]);
     let grids = names(&["twin", "blob"]);
-    let layout = GradientLayout::select(&mut scene, &params, &grids).unwrap();
+    let layout = GradientLayout::select(&scene, &params, &grids).unwrap();
     assert_eq!(layout.grids.len(), 2);
     for (seed, norm) in [
         (3, Normalization::Differentiable),
@@ -606,7 +594,7 @@ fn smooth_direction(shape: [usize; 3], seed: u64) -> Vec<f32> {
 fn loss_gradient_matches_finite_differences() {
     let size = 24;
     let spp = 16;
-    let mut scene = grid_scene("fd", DIRECT, size, 12, false);
+    let scene = grid_scene("fd", DIRECT, size, 12, false);
     let node = "blob".to_string();
     let values = scene.grid_values(&node).unwrap().values.clone();
     let target_scene = scene
@@ -620,7 +608,7 @@ fn loss_gradient_matches_finite_differences() {
         .unwrap();
     let target = image(&target_scene, 256, 999);
     let params = names(&["ball.radius", "light.center.x", "blob.albedo.g"]);
-    let layout = GradientLayout::select(&mut scene, &params, std::slice::from_ref(&node)).unwrap();
+    let layout = GradientLayout::select(&scene, &params, std::slice::from_ref(&node)).unwrap();
     let (block, first) = layout.grids[0].clone();
     let u = smooth_direction(block.shape, 77);
     let seeds: Vec<u64> = (0..12).map(|s| 100 + 2 * s).collect();
@@ -722,9 +710,9 @@ fn loss_gradient_matches_finite_differences() {
 #[test]
 fn gradient_is_identical_across_thread_counts() {
     let size = 16;
-    let mut scene = grid_scene("threads", PATH, size, 10, true);
+    let scene = grid_scene("threads", PATH, size, 10, true);
     let layout =
-        GradientLayout::select(&mut scene, &names(&PATH_PARAMS), &["blob".to_string()]).unwrap();
+        GradientLayout::select(&scene, &names(&PATH_PARAMS), &["blob".to_string()]).unwrap();
     let g = adjoint(size, size, 8);
     let options = options(2, 9, 2, 4, Normalization::default());
     let run = |threads: usize| {
@@ -755,10 +743,10 @@ fn gradient_is_identical_across_thread_counts() {
 
 /// Every parameter of `scene` (and every grid's values) selected; the gradient of a random adjoint has
 /// finite entries only and no sample was dropped as non-finite.
-fn assert_finite_gradient(label: &str, mut scene: Scene) {
+fn assert_finite_gradient(label: &str, scene: Scene) {
     let params: Vec<String> = scene.parameters().into_iter().map(|(n, _)| n).collect();
     let grids: Vec<String> = scene.grid_blocks().into_iter().map(|b| b.node).collect();
-    let layout = GradientLayout::select(&mut scene, &params, &grids).unwrap();
+    let layout = GradientLayout::select(&scene, &params, &grids).unwrap();
     let (w, h) = (scene.camera.width, scene.camera.height);
     let g = adjoint(w, h, 17);
     let options = options(4, 23, 4, 8, Normalization::default());

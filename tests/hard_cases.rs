@@ -327,7 +327,7 @@ fn far_from_the_origin() {
 #[test]
 fn tiny_silhouette_primary_sum_matches_closed_form() {
     for r in [0.0455f32, 0.02] {
-        let mut s = scene_json(&format!(
+        let s = scene_json(&format!(
             r#"{{"camera": {{"origin": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 40,
                   "width": 32, "height": 32, "filter": "tent"}},
                 "integrator": {{"type": "direct"}},
@@ -336,8 +336,8 @@ fn tiny_silhouette_primary_sum_matches_closed_form() {
                 "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#,
             diffuse(0.5)
         ));
-        s.select_parameters(&["ball.radius".to_string()]).unwrap();
-        let primary = render_primary(&s, 1, &diff_options(1, seed(21)), 100_000).unwrap();
+        let radius = s.select(&["ball.radius"]).unwrap();
+        let primary = render_primary(&s, &radius, &diff_options(1, seed(21)), 100_000).unwrap();
         let f = 16.0f64 / 20.0f64.to_radians().tan();
         let sin_a = r as f64 / 4.0;
         let cos_a = (1.0 - sin_a * sin_a).sqrt();

@@ -3,7 +3,7 @@
 //! grazing angles.
 //!
 //! Scenes are built here with the parameter's value as an argument, so the finite-difference renders are
-//! the same scene with the value moved (`select = true` gives that parameter derivative slot 0).
+//! the same scene with the value moved; the derivative selects the parameter by its name.
 
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
@@ -59,34 +59,31 @@ enum SphereParam {
     LightY,
 }
 
+impl SphereParam {
+    /// The parameter's name in the scene.
+    fn name(self) -> &'static str {
+        match self {
+            SphereParam::Radius => "ball.radius",
+            SphereParam::CameraX => "camera.origin.x",
+            SphereParam::AlbedoR => "ball.albedo.r",
+            SphereParam::RadianceR => "light.radiance.r",
+            SphereParam::LightY => "light.center.y",
+        }
+    }
+}
+
 /// A diffuse unit sphere (no floor: no shadow edges) under a rectangle light, seen from the front; the
 /// light is out of view. `value` replaces the number named by `which`.
-fn sphere_scene(which: SphereParam, value: f32, select: bool) -> Scene {
+fn sphere_scene(which: SphereParam, value: f32) -> Scene {
     let v = |p: SphereParam, default: f32| if p == which { value } else { default };
-    let slot = |p: SphereParam| (select && p == which).then_some(0u32);
-    let mut cam = camera([v(SphereParam::CameraX, 0.0), 1.0, 4.0], [0.0; 3], 30.0);
-    cam.origin.c[0].slot = slot(SphereParam::CameraX);
-    let mut sdf = Sdf::sphere([0.0; 3], v(SphereParam::Radius, 1.0));
-    if let Sdf::Sphere { radius, .. } = &mut sdf {
-        radius.slot = slot(SphereParam::Radius);
-    }
-    let mut bsdf = diffuse([v(SphereParam::AlbedoR, 0.7), 0.5, 0.3]);
-    let Bsdf::Diffuse { albedo } = &mut bsdf else {
-        unreachable!("built as diffuse")
-    };
-    albedo.c[0].slot = slot(SphereParam::AlbedoR);
-    let mut light = rectangle(
+    let cam = camera([v(SphereParam::CameraX, 0.0), 1.0, 4.0], [0.0; 3], 30.0);
+    let sdf = Sdf::sphere([0.0; 3], v(SphereParam::Radius, 1.0));
+    let bsdf = diffuse([v(SphereParam::AlbedoR, 0.7), 0.5, 0.3]);
+    let light = rectangle(
         [0.8, v(SphereParam::LightY, 3.0), 1.0],
         1.0,
         [v(SphereParam::RadianceR, 20.0), 15.0, 10.0],
     );
-    if let Emitter::Rectangle {
-        center, radiance, ..
-    } = &mut light.emitter
-    {
-        radiance.c[0].slot = slot(SphereParam::RadianceR);
-        center.c[1].slot = slot(SphereParam::LightY);
-    }
     Scene::new(
         cam,
         IntegratorKind::Direct,
@@ -103,23 +100,28 @@ enum FloorParam {
     LightY,
 }
 
+impl FloorParam {
+    /// The parameter's name in the scene.
+    fn name(self) -> &'static str {
+        match self {
+            FloorParam::TranslateY => "floor.translate.y",
+            FloorParam::LightY => "light.center.y",
+        }
+    }
+}
+
 /// An infinite diffuse floor (a plane, moved by `translate.y`) under a rectangle light, no occluder; the
 /// camera looks down at it so the floor fills the frame and the light is out of view.
-fn floor_scene(which: FloorParam, value: f32, select: bool, integrator: IntegratorKind) -> Scene {
+fn floor_scene(which: FloorParam, value: f32, integrator: IntegratorKind) -> Scene {
     let v = |p: FloorParam, default: f32| if p == which { value } else { default };
-    let slot = |p: FloorParam| (select && p == which).then_some(0u32);
-    let mut translate = Param3::new([0.0, v(FloorParam::TranslateY, 0.0), 0.0]);
-    translate.c[1].slot = slot(FloorParam::TranslateY);
+    let translate = Param3::new([0.0, v(FloorParam::TranslateY, 0.0), 0.0]);
     let floor = Shape::translated(
         "floor",
         Sdf::plane(glam::Vec3::Y, 0.0),
         diffuse([0.6; 3]),
         translate,
     );
-    let mut light = rectangle([0.3, v(FloorParam::LightY, 2.0), 0.2], 1.0, [10.0; 3]);
-    if let Emitter::Rectangle { center, .. } = &mut light.emitter {
-        center.c[1].slot = slot(FloorParam::LightY);
-    }
+    let light = rectangle([0.3, v(FloorParam::LightY, 2.0), 0.2], 1.0, [10.0; 3]);
     Scene::new(
         camera([0.0, 3.0, 3.0], [0.0, 0.0, -0.2], 50.0),
         integrator,
@@ -245,20 +247,22 @@ fn assert_finite(images: &[Image], what: &str) {
 /// Interior derivative (`spp_d`) against FD (`spp_fd`, step `h`), relative L2 over unmasked pixels;
 /// also the derivative's own noise, the relative L2 between two seeds divided by √2.
 fn fd_error(
-    build: &dyn Fn(f32, bool) -> Scene,
+    build: &dyn Fn(f32) -> Scene,
+    name: &str,
     value: f32,
     h: f32,
     spp_d: u32,
     spp_fd: u32,
     normalization: Normalization,
 ) -> (f64, f64, usize) {
-    let scene = build(value, true);
+    let scene = build(value);
+    let selection = scene.select(&[name]).unwrap();
     let mask = silhouette_mask(&scene);
-    let d = render_interior(&scene, 1, &options(spp_d, 1, normalization)).unwrap();
-    let d2 = render_interior(&scene, 1, &options(spp_d, 2, normalization)).unwrap();
+    let d = render_interior(&scene, &selection, &options(spp_d, 1, normalization)).unwrap();
+    let d2 = render_interior(&scene, &selection, &options(spp_d, 2, normalization)).unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_finite(&d.interior, "fd_error");
-    let fd = finite_difference(&|v| build(v, false), value, h, spp_fd);
+    let fd = finite_difference(build, value, h, spp_fd);
     eprintln!(
         "  unblurred: relative L2 vs FD {:.4}",
         relative_l2(&d.interior[0], &fd, &mask)
@@ -274,34 +278,33 @@ fn fd_error(
 
 #[test]
 fn image_channel_is_the_render() {
-    let mut scene = sphere_scene(SphereParam::Radius, 1.0, true);
-    if let Emitter::Rectangle { center, .. } = &mut scene.emitters[0].emitter {
-        center.c[1].slot = Some(1);
-    }
-    scene.camera.origin.c[0].slot = Some(2);
+    let scene = sphere_scene(SphereParam::Radius, 1.0);
+    let names = ["ball.radius", "light.center.y", "camera.origin.x"];
     for spp in [1, 5] {
         let o = options(spp, 3, Normalization::Fixed);
         let (image, stats) = render(&scene, &o.render);
         for count in [0, 1, 3] {
-            let d = render_interior(&scene, count, &o).unwrap();
+            let selection = scene.select(&names[..count]).unwrap();
+            let d = render_interior(&scene, &selection, &o).unwrap();
             assert_eq!(d.image, image, "count {count}, spp {spp}");
             assert_eq!(d.interior.len(), count);
             assert_eq!(d.stats.samples, stats.samples);
             assert_eq!(d.stats.exhausted_rays, stats.exhausted_rays);
         }
         let o = options(spp, 3, Normalization::Differentiable);
-        assert_eq!(render_interior(&scene, 3, &o).unwrap().image, image);
+        let three = scene.select(&names).unwrap();
+        assert_eq!(render_interior(&scene, &three, &o).unwrap().image, image);
     }
     // The floor scene under the path integrator (several bounces) too.
     let floor = floor_scene(
         FloorParam::TranslateY,
         0.0,
-        true,
         IntegratorKind::Path { max_depth: 3 },
     );
     let o = options(3, 5, Normalization::Fixed);
+    let translate = floor.select(&[FloorParam::TranslateY.name()]).unwrap();
     assert_eq!(
-        render_interior(&floor, 1, &o).unwrap().image,
+        render_interior(&floor, &translate, &o).unwrap().image,
         render(&floor, &o.render).0
     );
 }
@@ -310,18 +313,17 @@ fn image_channel_is_the_render() {
 /// agree to rounding on every shared parameter.
 #[test]
 fn dual32_and_dual8_agree() {
-    let mut scene = sphere_scene(SphereParam::Radius, 1.0, true);
-    if let Emitter::Rectangle { center, .. } = &mut scene.emitters[0].emitter {
-        center.c[1].slot = Some(1);
-    }
-    scene.camera.origin.c[0].slot = Some(2);
-    let Bsdf::Diffuse { albedo } = &mut scene.shapes[0].bsdf else {
-        unreachable!("the scene is diffuse")
-    };
-    albedo.c[1].slot = Some(3);
+    let scene = sphere_scene(SphereParam::Radius, 1.0);
+    let names = [
+        "ball.radius",
+        "light.center.y",
+        "camera.origin.x",
+        "ball.albedo.g",
+    ];
+    let four = scene.select(&names).unwrap();
     let o = options(4, 11, Normalization::Fixed);
-    let one = render_interior_in::<Dual32>(&scene, 4, &o).unwrap();
-    let eight = render_interior_in::<DualN<8>>(&scene, 4, &o).unwrap();
+    let one = render_interior_in::<Dual32>(&scene, &four, &o).unwrap();
+    let eight = render_interior_in::<DualN<8>>(&scene, &four, &o).unwrap();
     // num-dual's primal rounding may differ from f32's in the last bit; `DualN` is exact (tested above).
     for (a, b) in one.image.rgb.iter().zip(&eight.image.rgb) {
         assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "image {a} vs {b}");
@@ -345,22 +347,21 @@ fn dual32_and_dual8_agree() {
 
 #[test]
 fn deterministic_across_thread_counts() {
-    let mut scene = floor_scene(
+    let scene = floor_scene(
         FloorParam::TranslateY,
         0.0,
-        true,
         IntegratorKind::Path { max_depth: 2 },
     );
-    if let Emitter::Rectangle { center, .. } = &mut scene.emitters[0].emitter {
-        center.c[1].slot = Some(1);
-    }
+    let two = scene
+        .select(&["floor.translate.y", "light.center.y"])
+        .unwrap();
     let o = options(3, 9, Normalization::Differentiable);
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_interior(&scene, 2, &o).unwrap())
+            .install(|| render_interior(&scene, &two, &o).unwrap())
     };
     let a = run(1);
     let b = run(3);
@@ -375,9 +376,10 @@ fn deterministic_across_thread_counts() {
 #[test]
 fn linear_parameters_are_exact() {
     for (which, value) in [(SphereParam::AlbedoR, 0.7), (SphereParam::RadianceR, 20.0)] {
-        let scene = sphere_scene(which, value, true);
+        let scene = sphere_scene(which, value);
+        let selection = scene.select(&[which.name()]).unwrap();
         for normalization in [Normalization::Fixed, Normalization::Differentiable] {
-            let d = render_interior(&scene, 1, &options(4, 5, normalization)).unwrap();
+            let d = render_interior(&scene, &selection, &options(4, 5, normalization)).unwrap();
             let scale = d.image.rgb.iter().fold(0.0f32, |m, v| m.max(v.abs())) / value;
             let mut lit = 0;
             for p in 0..(SIZE * SIZE) as usize {
@@ -398,9 +400,10 @@ fn linear_parameters_are_exact() {
 
 #[test]
 fn box_filter_is_refused() {
-    let mut scene = sphere_scene(SphereParam::Radius, 1.0, true);
+    let mut scene = sphere_scene(SphereParam::Radius, 1.0);
     scene.camera.filter = Filter::Box;
-    let err = render_interior(&scene, 1, &options(1, 0, Normalization::Fixed)).unwrap_err();
+    let radius = scene.select(&[SphereParam::Radius.name()]).unwrap();
+    let err = render_interior(&scene, &radius, &options(1, 0, Normalization::Fixed)).unwrap_err();
     assert!(err.to_string().contains("box filter"), "{err}");
 }
 
@@ -417,36 +420,36 @@ fn box_filter_is_refused() {
 /// 2.0 (tried once, not kept).
 #[test]
 fn geometric_parameters_match_finite_differences() {
-    type Build<'a> = &'a dyn Fn(f32, bool) -> Scene;
+    type Build<'a> = &'a dyn Fn(f32) -> Scene;
     let cases: [(&str, Build, f32, f32); 4] = [
         (
             "ball.radius",
-            &|v, s| sphere_scene(SphereParam::Radius, v, s),
+            &|v| sphere_scene(SphereParam::Radius, v),
             1.0,
             1e-2,
         ),
         (
             "floor.translate.y",
-            &|v, s| floor_scene(FloorParam::TranslateY, v, s, IntegratorKind::Direct),
+            &|v| floor_scene(FloorParam::TranslateY, v, IntegratorKind::Direct),
             0.0,
             1e-2,
         ),
         (
             "camera.origin.x",
-            &|v, s| sphere_scene(SphereParam::CameraX, v, s),
+            &|v| sphere_scene(SphereParam::CameraX, v),
             0.0,
             2e-2,
         ),
         (
             "light.center.y",
-            &|v, s| floor_scene(FloorParam::LightY, v, s, IntegratorKind::Direct),
+            &|v| floor_scene(FloorParam::LightY, v, IntegratorKind::Direct),
             2.0,
             1e-2,
         ),
     ];
     let mut failures = Vec::new();
     for (name, build, value, h) in cases {
-        let (err, noise, kept) = fd_error(build, value, h, 256, 2048, Normalization::Fixed);
+        let (err, noise, kept) = fd_error(build, name, value, h, 256, 2048, Normalization::Fixed);
         eprintln!("{name}: relative L2 vs FD {err:.4} (own noise {noise:.4}, {kept} pixels kept)");
         assert!(kept > 100, "{name}: too few pixels kept ({kept})");
         assert!(noise < 0.2, "{name}: too noisy to test ({noise})");
@@ -477,14 +480,10 @@ const ROOM: &str = r#"{
   ]
 }"#;
 
-/// The room with parameter `name` set to `value` and, if `select`, differentiated.
-fn room_scene(name: &str, value: f32, select: bool) -> Scene {
+/// The room with parameter `name` set to `value`.
+fn room_scene(name: &str, value: f32) -> Scene {
     let scene = implicit_psdr::scene::parse(ROOM, std::path::Path::new(".")).unwrap();
-    let mut scene = scene.with_parameter(name, value).unwrap();
-    if select {
-        scene.select_parameters(&[name.to_string()]).unwrap();
-    }
-    scene
+    scene.with_parameter(name, value).unwrap()
 }
 
 /// The `path` integrator against finite differences: the albedo enters non-linearly through the bounces
@@ -497,8 +496,8 @@ fn path_integrator_matches_finite_differences() {
         ("room.albedo.g", 0.6, 2e-2, 128),
         ("room.children.1.half_size.z", 2.0, 2e-2, 512),
     ] {
-        let build = |v: f32, s: bool| room_scene(name, v, s);
-        let (err, noise, kept) = fd_error(&build, value, h, spp, 2048, Normalization::Fixed);
+        let build = |v: f32| room_scene(name, v);
+        let (err, noise, kept) = fd_error(&build, name, value, h, spp, 2048, Normalization::Fixed);
         eprintln!(
             "path, {name}: relative L2 vs FD {err:.4} (own noise {noise:.4}, {kept} pixels kept)"
         );
@@ -515,9 +514,18 @@ fn path_integrator_matches_finite_differences() {
 /// primary boundary term vanishes; its noise is lower than `Fixed`'s on a moving camera.
 #[test]
 fn differentiable_normalization_matches_finite_differences() {
-    let build = |v, s| sphere_scene(SphereParam::CameraX, v, s);
-    let (err, noise, _) = fd_error(&build, 0.0, 2e-2, 256, 2048, Normalization::Differentiable);
-    let (_, fixed_noise, _) = fd_error(&build, 0.0, 2e-2, 256, 64, Normalization::Fixed);
+    let build = |v| sphere_scene(SphereParam::CameraX, v);
+    let name = SphereParam::CameraX.name();
+    let (err, noise, _) = fd_error(
+        &build,
+        name,
+        0.0,
+        2e-2,
+        256,
+        2048,
+        Normalization::Differentiable,
+    );
+    let (_, fixed_noise, _) = fd_error(&build, name, 0.0, 2e-2, 256, 64, Normalization::Fixed);
     eprintln!(
         "camera.origin.x, differentiable: relative L2 vs FD {err:.4} (noise {noise:.4}, fixed's {fixed_noise:.4})"
     );
@@ -531,27 +539,30 @@ fn no_nan_at_grazing_angles() {
     let mut graze = floor_scene(
         FloorParam::TranslateY,
         0.0,
-        true,
         IntegratorKind::Path { max_depth: 2 },
     );
     graze.camera = camera([0.0, 0.02, 3.0], [0.0, 0.0, -10.0], 40.0);
-    graze.camera.origin.c[1].slot = Some(1);
-    graze.camera.fov_y.slot = Some(2);
-    if let Emitter::Rectangle { center, .. } = &mut graze.emitters[0].emitter {
-        center.c[2].slot = Some(3);
-    }
-    let d = render_interior(&graze, 4, &options(8, 1, Normalization::Differentiable)).unwrap();
+    let four = graze.select(&[
+        "floor.translate.y",
+        "camera.origin.y",
+        "camera.fov_y",
+        "light.center.z",
+    ]);
+    let o = options(8, 1, Normalization::Differentiable);
+    let d = render_interior(&graze, &four.unwrap(), &o).unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_eq!(d.stats.invalid_samples, 0);
     assert_finite(&d.interior, "grazing floor");
     // A sphere filling most of the frame: many samples near its limb.
-    let mut limb = sphere_scene(SphereParam::Radius, 1.0, true);
+    let mut limb = sphere_scene(SphereParam::Radius, 1.0);
     limb.camera = camera([0.0, 0.0, 3.0], [0.0; 3], 45.0);
-    if let Sdf::Sphere { center, .. } = &mut limb.shapes[0].sdf {
-        center.c[0].slot = Some(1);
-    }
-    limb.shapes[0].translate.c[2].slot = Some(2);
-    let d = render_interior(&limb, 3, &options(16, 1, Normalization::Fixed)).unwrap();
+    let three = limb.select(&["ball.radius", "ball.center.x", "ball.translate.z"]);
+    let d = render_interior(
+        &limb,
+        &three.unwrap(),
+        &options(16, 1, Normalization::Fixed),
+    )
+    .unwrap();
     assert_eq!(d.stats.invalid_derivatives, 0);
     assert_finite(&d.interior, "sphere limb");
 }

@@ -199,17 +199,12 @@ fn at_scale_and_offset(
     offset: [f32; 3],
     seed: u64,
 ) -> (Vec<f64>, Vec<Vec<f64>>, u64) {
-    let mut scene = ball_on_a_slab(s, rounding, offset);
-    scene.select_parameters(&LENGTHS.map(String::from)).unwrap();
+    let scene = ball_on_a_slab(s, rounding, offset);
+    let lengths = scene.select(&LENGTHS).unwrap();
     // The image of a derivative pass is the primal render's at the same seed and spp.
-    let out = render_derivatives_with_boundary(
-        &scene,
-        LENGTHS.len(),
-        &diff_options(64, seed),
-        20_000,
-        80_000,
-    )
-    .unwrap();
+    let out =
+        render_derivatives_with_boundary(&scene, &lengths, &diff_options(64, seed), 20_000, 80_000)
+            .unwrap();
     assert_finite(&out, &format!("scale {s}"));
     let derivatives = out
         .total()
@@ -463,13 +458,16 @@ fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
         );
     }
     let derivative = |angle: f32, seed: u64| {
-        let mut scene = turned_scene(angle, "direct", true);
-        scene
-            .select_parameters(&["ball.radius".to_string()])
-            .unwrap();
-        let out =
-            render_derivatives_with_boundary(&scene, 1, &diff_options(64, seed), 40_000, 160_000)
-                .unwrap();
+        let scene = turned_scene(angle, "direct", true);
+        let radius = scene.select(&["ball.radius"]).unwrap();
+        let out = render_derivatives_with_boundary(
+            &scene,
+            &radius,
+            &diff_options(64, seed),
+            40_000,
+            160_000,
+        )
+        .unwrap();
         assert_finite(&out, &format!("{angle}°"));
         assert_eq!(
             out.stats.exhausted_rays, 0,
@@ -795,13 +793,10 @@ fn check_silhouette(
     let size = scene.camera.width as usize;
     let edge = traced_edge(scene) - 0.5 * size as f32;
     println!("{label}: traced silhouette {edge:+.3} px from the exact one");
-    let mut scene = scene.clone();
-    scene
-        .select_parameters(&SILHOUETTE_PARAMETERS.map(String::from))
-        .unwrap();
+    let selection = scene.select(&SILHOUETTE_PARAMETERS).unwrap();
     let out = render_derivatives_with_boundary(
-        &scene,
-        SILHOUETTE_PARAMETERS.len(),
+        scene,
+        &selection,
         &diff_options(c.spp, seed(base)),
         c.primary,
         c.secondary,
@@ -817,7 +812,7 @@ fn check_silhouette(
         let total = gray(&out.total()[k]);
         let interior = gray(&out.interior[k]);
         let reference = render_with_difference(
-            &scene,
+            scene,
             name,
             Some(c.h),
             &RenderOptions {

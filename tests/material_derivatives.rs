@@ -241,13 +241,14 @@ fn glossy_reflection_of_a_moving_shape_path() {
 #[test]
 fn reverse_mode_equals_forward_mode() {
     for integrator in [DIRECT, PATH] {
-        let mut scene = materials_scene(integrator, 16, 12);
+        let scene = materials_scene(integrator, 16, 12);
         let mut names: Vec<String> = MATERIAL_PARAMS.iter().map(|p| p.0.to_string()).collect();
         names.push("ball.center.x".into());
-        let layout = GradientLayout::select(&mut scene, &names, &[]).unwrap();
+        let layout = GradientLayout::select(&scene, &names, &[]).unwrap();
         let options = diff_options(4, 7);
         let adjoint = adjoint_image(16, 12);
-        let forward = integrator::render_derivatives(&scene, names.len(), &options).unwrap();
+        let selection = scene.select(&names).unwrap();
+        let forward = integrator::render_derivatives(&scene, &selection, &options).unwrap();
         let reverse = render_gradient(&scene, &layout, &adjoint, &options).unwrap();
         for (k, name) in names.iter().enumerate() {
             for (term, f, r) in [

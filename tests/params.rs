@@ -25,6 +25,11 @@ fn names(list: &[&str]) -> Vec<String> {
     list.iter().map(|s| s.to_string()).collect()
 }
 
+/// A copy of `scene` with the parameters `wanted` selected (what the estimators render).
+fn selected(scene: &Scene, wanted: &[&str]) -> Scene {
+    scene.select(wanted).unwrap().apply(scene).unwrap()
+}
+
 /// Slot of every parameter, by name.
 fn slots(scene: &Scene) -> Vec<(String, Option<u32>)> {
     let mut out = Vec::new();
@@ -227,30 +232,34 @@ fn camera_is_a_reserved_name() {
 }
 
 #[test]
-fn select_parameters_sets_exactly_the_requested_slots() {
-    let mut scene = example("csg");
-    let wanted = names(&["ring.sdf.angle", "blob.k", "camera.fov_y", "sky.radiance.g"]);
-    scene.select_parameters(&wanted).unwrap();
-    for (name, slot) in slots(&scene) {
+fn a_selection_sets_exactly_the_requested_slots() {
+    let scene = example("csg");
+    let wanted = ["ring.sdf.angle", "blob.k", "camera.fov_y", "sky.radiance.g"];
+    let selection = scene.select(&wanted).unwrap();
+    assert_eq!(selection.names(), wanted);
+    for (name, slot) in slots(&selection.apply(&scene).unwrap()) {
         let expected = wanted.iter().position(|w| *w == name).map(|k| k as u32);
         assert_eq!(slot, expected, "{name}");
     }
-    // A new selection replaces the old one; an empty one clears it.
-    scene
-        .select_parameters(&names(&["floor.translate.y"]))
-        .unwrap();
-    let selected: Vec<_> = slots(&scene)
+    // The scene itself carries no selection; applying another one replaces the first, and an empty
+    // one selects nothing.
+    assert!(slots(&scene).iter().all(|(_, s)| s.is_none()));
+    let twice = selected(&selection.apply(&scene).unwrap(), &["floor.translate.y"]);
+    let chosen: Vec<_> = slots(&twice)
         .into_iter()
         .filter(|(_, s)| s.is_some())
         .collect();
-    assert_eq!(selected, vec![("floor.translate.y".to_string(), Some(0))]);
-    scene.select_parameters(&[]).unwrap();
-    assert!(slots(&scene).iter().all(|(_, s)| s.is_none()));
+    assert_eq!(chosen, vec![("floor.translate.y".to_string(), Some(0))]);
+    assert!(
+        slots(&selected(&twice, &[]))
+            .iter()
+            .all(|(_, s)| s.is_none())
+    );
 }
 
 #[test]
 fn selected_parameters_lift_to_the_expected_derivatives() {
-    let mut scene = example("sphere_floor");
+    let base = example("sphere_floor");
     let p = glam::Vec3::new(0.3, 1.2, -0.5);
     let n = p.normalize();
 
@@ -261,25 +270,20 @@ fn selected_parameters_lift_to_the_expected_derivatives() {
         ("ball.center.y", -n.y),
         ("floor.translate.y", 0.0),
     ] {
-        scene.select_parameters(&names(&[name])).unwrap();
+        let scene = selected(&base, &[name]);
         let d = scene.shapes[0].eval(dual_point(p));
         assert!((d.re - (p.length() - 1.0)).abs() < 1e-6);
         assert!((d.eps - expected).abs() < 1e-6, "{name}: {d:?}");
     }
     // The floor's top face is y = −1.5 (box centre −2, half size 0.5) moved by translate.y.
-    scene
-        .select_parameters(&names(&["floor.translate.y"]))
-        .unwrap();
+    let scene = selected(&base, &["floor.translate.y"]);
     assert!((scene.shapes[1].eval(dual_point(p)).eps + 1.0).abs() < 1e-6);
 
     // Several directions in one pass: the same numbers, in the requested slots.
-    scene
-        .select_parameters(&names(&[
-            "ball.translate.x",
-            "floor.translate.y",
-            "ball.radius",
-        ]))
-        .unwrap();
+    let scene = selected(
+        &base,
+        &["ball.translate.x", "floor.translate.y", "ball.radius"],
+    );
     let q = Vec3::new(
         DualN::<3>::constant(p.x),
         DualN::constant(p.y),
@@ -324,10 +328,7 @@ fn every_derivative_matches_a_finite_difference_of_the_value() {
         let base = example(scene_name);
         let mut checked = 0;
         for (name, value) in base.parameters() {
-            let mut lifted = base.clone();
-            lifted
-                .select_parameters(std::slice::from_ref(&name))
-                .unwrap();
+            let lifted = selected(&base, &[name.as_str()]);
             let (Ok(plus), Ok(minus)) = (
                 base.with_parameter(&name, value + h),
                 base.with_parameter(&name, value - h),
@@ -355,12 +356,9 @@ fn every_derivative_matches_a_finite_difference_of_the_value() {
 
 #[test]
 fn unknown_and_repeated_names_are_clear_errors() {
-    let mut scene = example("sphere_floor");
-    scene.select_parameters(&names(&["ball.radius"])).unwrap();
-    let before = scene.clone();
-
+    let scene = example("sphere_floor");
     let e = scene
-        .select_parameters(&names(&["light.center.y", "ball.radus"]))
+        .select(&["light.center.y", "ball.radus"])
         .unwrap_err()
         .to_string();
     assert!(
@@ -370,13 +368,9 @@ fn unknown_and_repeated_names_are_clear_errors() {
     // The library names its own registry, not a front end's option or command.
     assert!(!e.contains("--") && !e.contains("implicit-psdr"), "{e}");
     assert!(!e.contains('\n'), "{e}");
-    assert_eq!(scene, before, "a failed selection changes nothing");
 
     // Up to three near matches, nearest first.
-    let e = scene
-        .select_parameters(&names(&["ball.center.w"]))
-        .unwrap_err()
-        .to_string();
+    let e = scene.select(&["ball.center.w"]).unwrap_err().to_string();
     assert!(
         e.contains("did you mean ball.center.x, ball.center.y, ball.center.z?"),
         "{e}"
@@ -388,11 +382,10 @@ fn unknown_and_repeated_names_are_clear_errors() {
     assert_eq!(e, "params: no parameter \"nothing\"");
 
     let e = scene
-        .select_parameters(&names(&["ball.radius", "light.center.y", "ball.radius"]))
+        .select(&["ball.radius", "light.center.y", "ball.radius"])
         .unwrap_err()
         .to_string();
     assert!(e.contains("\"ball.radius\" is given twice"), "{e}");
-    assert_eq!(scene, before);
 
     let e = scene.with_parameter("ligth.center.y", 3.0).unwrap_err();
     assert!(e.to_string().contains("did you mean light.center.y"), "{e}");
@@ -400,8 +393,7 @@ fn unknown_and_repeated_names_are_clear_errors() {
 
 #[test]
 fn with_parameter_sets_the_value_and_recomputes_derived_data() {
-    let mut scene = example("sphere_floor");
-    scene.select_parameters(&names(&["ball.radius"])).unwrap();
+    let scene = selected(&example("sphere_floor"), &["ball.radius"]);
     let big = scene.with_parameter("ball.radius", 1.5).unwrap();
     assert_eq!(big.parameter("ball.radius").unwrap(), 1.5);
     assert_eq!(big.shapes[0].bounds.max, glam::Vec3::splat(1.5));

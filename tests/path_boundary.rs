@@ -111,12 +111,18 @@ fn add(a: &[f64], b: &[f64]) -> Vec<f64> {
 /// `max_depth = 2` wall scene: `[interior, primary, secondary, fd]`.
 fn terms(name: &str, h: f32, seed: u64, fd_seed: u64) -> [Vec<f64>; 4] {
     let path = IntegratorKind::Path { max_depth: 2 };
-    let mut scene = wall_scene(path);
-    scene.select_parameters(&[name.to_string()]).unwrap();
+    let scene = wall_scene(path);
+    let selection = scene.select(&[name]).unwrap();
     let pixels = (SIZE * SIZE) as u64;
-    let out =
-        render_derivatives_with_boundary(&scene, 1, &options(64, seed), 16 * pixels, 192 * pixels)
-            .unwrap();
+    let budgets = (16 * pixels, 192 * pixels);
+    let out = render_derivatives_with_boundary(
+        &scene,
+        &selection,
+        &options(64, seed),
+        budgets.0,
+        budgets.1,
+    )
+    .unwrap();
     for image in out.total().iter().chain(&out.primary).chain(&out.secondary) {
         assert!(image.rgb.iter().all(|v| v.is_finite()), "{name}: NaN/Inf");
     }
@@ -192,12 +198,12 @@ fn path_derivatives_match_finite_differences() {
 fn path_depth_one_is_direct() {
     let names = ["ball.center.x".to_string(), "light.center.x".to_string()];
     let run = |integrator| {
-        let mut scene = wall_scene(integrator);
-        scene.select_parameters(&names).unwrap();
+        let scene = wall_scene(integrator);
+        let two = scene.select(&names).unwrap();
         let opts = options(1, 3);
         (
-            render_secondary(&scene, 2, &opts, 20_000).unwrap(),
-            render_primary(&scene, 2, &opts, 5_000).unwrap(),
+            render_secondary(&scene, &two, &opts, 20_000).unwrap(),
+            render_primary(&scene, &two, &opts, 5_000).unwrap(),
         )
     };
     let (direct, path) = (
@@ -216,15 +222,15 @@ fn path_secondary_is_finite_and_deterministic() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let mut scene = wall_scene(IntegratorKind::Path { max_depth: 3 });
-    scene.select_parameters(&names).unwrap();
+    let scene = wall_scene(IntegratorKind::Path { max_depth: 3 });
+    let three = scene.select(&names).unwrap();
     let opts = options(1, 5);
     let run = |scene: &Scene, threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_secondary(scene, 3, &opts, 20_000).unwrap())
+            .install(|| render_secondary(scene, &three, &opts, 20_000).unwrap())
     };
     let (one, two) = (run(&scene, 1), run(&scene, 2));
     assert_eq!(one, two);

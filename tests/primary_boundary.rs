@@ -15,7 +15,7 @@ use implicit_psdr::integrator::{
     DiffOptions, Normalization, render_derivatives_with_boundary, render_interior,
 };
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions};
-use implicit_psdr::scene::{NamedEmitter, Scene, Shape};
+use implicit_psdr::scene::{NamedEmitter, Scene, Selection, Shape};
 use implicit_psdr::sdf::Sdf;
 use implicit_psdr::{Param, Param3};
 
@@ -65,12 +65,11 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
     }
 }
 
-fn selected(r: f32) -> Scene {
-    let mut scene = ball_scene(r);
-    scene
-        .select_parameters(&["ball.radius".to_string()])
-        .unwrap();
-    scene
+/// The ball scene and the selection of its radius.
+fn selected(r: f32) -> (Scene, Selection) {
+    let scene = ball_scene(r);
+    let radius = scene.select(&["ball.radius"]).unwrap();
+    (scene, radius)
 }
 
 fn tent(x: f64) -> f64 {
@@ -117,13 +116,13 @@ fn closed_form(r: f32, jump: f64) -> Vec<f64> {
 /// reported in the assertion message; the bound is 5 σ plus 1% of the ring's peak.
 #[test]
 fn ball_radius_matches_closed_form() {
-    let scene = selected(1.0);
+    let (scene, radius) = selected(1.0);
     let expected = closed_form(1.0, -(ENV as f64));
     let seeds = [1u64, 2, 3, 4];
     let runs: Vec<Vec<f64>> = seeds
         .iter()
         .map(|&s| {
-            let img = render_primary(&scene, 1, &diff_options(1, s), 200_000).unwrap();
+            let img = render_primary(&scene, &radius, &diff_options(1, s), 200_000).unwrap();
             gray(&img[0]).iter().map(|v| v / 3.0).collect()
         })
         .collect();
@@ -165,10 +164,10 @@ fn ball_radius_matches_closed_form() {
 /// differences with common random numbers; the interior alone (`+ρL …`) must fail.
 #[test]
 fn interior_plus_primary_matches_finite_differences() {
-    let scene = selected(1.0);
+    let (scene, radius) = selected(1.0);
     let opts = diff_options(512, 5);
-    let interior = gray(&render_interior(&scene, 1, &opts).unwrap().interior[0]);
-    let primary = gray(&render_primary(&scene, 1, &opts, 200_000).unwrap()[0]);
+    let interior = gray(&render_interior(&scene, &radius, &opts).unwrap().interior[0]);
+    let primary = gray(&render_primary(&scene, &radius, &opts, 200_000).unwrap()[0]);
     let fd = gray(
         &finite_difference(
             &ball_scene(1.0),
@@ -226,21 +225,15 @@ fn interior_plus_primary_matches_finite_differences() {
 /// directions alike on the film, so its primary term in front of the environment is exactly 0.)
 #[test]
 fn finite_and_deterministic() {
-    let mut scene = ball_scene(1.0);
-    scene
-        .select_parameters(&[
-            "ball.radius".to_string(),
-            "camera.origin.x".to_string(),
-            "ball.center.y".to_string(),
-        ])
-        .unwrap();
+    let scene = ball_scene(1.0);
+    let three = (scene.select(&["ball.radius", "camera.origin.x", "ball.center.y"])).unwrap();
     let opts = diff_options(1, 9);
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_primary(&scene, 3, &opts, 20_000).unwrap())
+            .install(|| render_primary(&scene, &three, &opts, 20_000).unwrap())
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.len(), 3);
@@ -252,7 +245,8 @@ fn finite_and_deterministic() {
     // The path integrator is supported (its background radiance is its own estimator's).
     let mut path = ball_scene(1.0);
     path.integrator = IntegratorKind::Path { max_depth: 2 };
-    assert!(render_primary(&path, 1, &opts, 10).is_ok());
+    let radius = path.select(&["ball.radius"]).unwrap();
+    assert!(render_primary(&path, &radius, &opts, 10).is_ok());
 }
 
 /// A black ball (albedo 0, so only its silhouette matters) in front of a large emitting rectangle (a
@@ -302,8 +296,8 @@ fn finite_background_matches_finite_differences() {
         ("ball.radius", 0.02),
         ("camera.origin.x", 0.05),
     ] {
-        let mut scene = backdrop_scene();
-        scene.select_parameters(&[name.to_string()]).unwrap();
+        let scene = backdrop_scene();
+        let selection = scene.select(&[name]).unwrap();
         // The camera's interior term is noisy per pixel (moving projections through the filter).
         let spp = if name.starts_with("camera") {
             8192
@@ -311,8 +305,8 @@ fn finite_background_matches_finite_differences() {
             128
         };
         let opts = diff_options(spp, 5);
-        let interior = gray(&render_interior(&scene, 1, &opts).unwrap().interior[0]);
-        let primary = gray(&render_primary(&scene, 1, &opts, 200_000).unwrap()[0]);
+        let interior = gray(&render_interior(&scene, &selection, &opts).unwrap().interior[0]);
+        let primary = gray(&render_primary(&scene, &selection, &opts, 200_000).unwrap()[0]);
         let fd = gray(
             &finite_difference(
                 &backdrop_scene(),
@@ -364,14 +358,16 @@ fn finite_background_matches_finite_differences() {
 /// sum is within 0.3% and the relative L2 0.055).
 #[test]
 fn differentiable_normalization_matches_closed_form() {
-    let scene = selected(1.0);
+    let (scene, radius) = selected(1.0);
     let mut opts = diff_options(256, 5);
     opts.normalization = Normalization::Differentiable;
-    let out = render_derivatives_with_boundary(&scene, 1, &opts, 200_000, 0).unwrap();
+    let out = render_derivatives_with_boundary(&scene, &radius, &opts, 200_000, 0).unwrap();
     let total = gray(&out.total()[0]);
     let without_w: Vec<f64> = gray(&out.interior[0])
         .iter()
-        .zip(gray(&render_primary(&scene, 1, &opts, 200_000).unwrap()[0]))
+        .zip(gray(
+            &render_primary(&scene, &radius, &opts, 200_000).unwrap()[0],
+        ))
         .map(|(a, b)| a + b)
         .collect();
     let cf: Vec<f64> = closed_form(1.0, -((1.0 - RHO) * ENV) as f64)

@@ -107,16 +107,16 @@ fn diff_options(spp: u32, seed: u64) -> DiffOptions {
 
 /// Interior, secondary and finite differences for one parameter.
 fn terms(name: &str, h: f32, spp: u32, boundary: u64, fd_spp: u32) -> [Vec<f64>; 3] {
-    let mut scene = shadow_scene();
-    scene.select_parameters(&[name.to_string()]).unwrap();
+    let scene = shadow_scene();
+    let selection = scene.select(&[name]).unwrap();
     let opts = diff_options(spp, 7);
-    let out = render_derivatives_with_boundary(&scene, 1, &opts, 0, boundary).unwrap();
-    let plain = render_interior(&scene, 1, &opts).unwrap();
+    let out = render_derivatives_with_boundary(&scene, &selection, &opts, 0, boundary).unwrap();
+    let plain = render_interior(&scene, &selection, &opts).unwrap();
     assert_eq!(out.interior, plain.interior);
     assert!(plain.secondary.is_empty());
     assert_eq!(
         out.secondary,
-        render_secondary(&scene, 1, &opts, boundary).unwrap()
+        render_secondary(&scene, &selection, &opts, boundary).unwrap()
     );
     let total = out.total();
     let (interior, secondary) = (out.interior[0].clone(), out.secondary[0].clone());
@@ -209,22 +209,20 @@ fn lone_sphere_has_no_secondary_term() {
         },
     };
     for emitters in [vec![light([0.5, 3.0, 0.5], 1.0)], vec![sky]] {
-        let mut scene = Scene::new(
+        let scene = Scene::new(
             camera.clone(),
             IntegratorKind::Direct,
             1,
             vec![ball()],
             emitters,
         );
-        scene
-            .select_parameters(&["ball.radius".into(), "ball.center.x".into()])
-            .unwrap();
-        let out = render_secondary(&scene, 2, &diff_options(1, 3), 50_000).unwrap();
-        let plain = render_interior(&scene, 2, &diff_options(2, 3)).unwrap();
+        let two = scene.select(&["ball.radius", "ball.center.x"]).unwrap();
+        let out = render_secondary(&scene, &two, &diff_options(1, 3), 50_000).unwrap();
+        let plain = render_interior(&scene, &two, &diff_options(2, 3)).unwrap();
         assert!(plain.secondary.is_empty());
         assert_eq!(plain.total(), plain.interior);
         let with =
-            render_derivatives_with_boundary(&scene, 2, &diff_options(2, 3), 0, 5_000).unwrap();
+            render_derivatives_with_boundary(&scene, &two, &diff_options(2, 3), 0, 5_000).unwrap();
         assert_eq!(with.interior, plain.interior);
         assert_eq!(with.total(), plain.interior);
         assert_eq!(out.len(), 2);
@@ -233,11 +231,11 @@ fn lone_sphere_has_no_secondary_term() {
         }
         let mut boxed = scene.clone();
         boxed.camera.filter = Filter::Box;
-        assert!(render_secondary(&boxed, 2, &diff_options(1, 3), 10).is_err());
+        assert!(render_secondary(&boxed, &two, &diff_options(1, 3), 10).is_err());
         // The path integrator too: a lone convex shape has no tangent line starting on a shape.
         let mut path = scene.clone();
         path.integrator = IntegratorKind::Path { max_depth: 3 };
-        for image in render_secondary(&path, 2, &diff_options(1, 3), 20_000).unwrap() {
+        for image in render_secondary(&path, &two, &diff_options(1, 3), 20_000).unwrap() {
             assert!(image.rgb.iter().all(|&v| v == 0.0));
         }
     }
@@ -251,8 +249,8 @@ fn secondary_is_finite_and_deterministic() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let mut scene = shadow_scene();
-    scene.select_parameters(&names).unwrap();
+    let scene = shadow_scene();
+    let three = scene.select(&names).unwrap();
     let mut opts = diff_options(1, 5);
     opts.normalization = Normalization::Fixed;
     let run = |threads: usize| {
@@ -260,7 +258,7 @@ fn secondary_is_finite_and_deterministic() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_secondary(&scene, 3, &opts, 20_000).unwrap())
+            .install(|| render_secondary(&scene, &three, &opts, 20_000).unwrap())
     };
     let (one, two) = (run(1), run(2));
     assert_eq!(one, two);
@@ -268,9 +266,8 @@ fn secondary_is_finite_and_deterministic() {
         assert!(image.rgb.iter().all(|v| v.is_finite()));
         assert!(image.rgb.iter().any(|&v| v != 0.0));
     }
-    let mut single = shadow_scene();
-    single.select_parameters(&names[1..2]).unwrap();
-    let alone = render_secondary(&single, 1, &opts, 20_000).unwrap();
+    let one_name = scene.select(&names[1..2]).unwrap();
+    let alone = render_secondary(&scene, &one_name, &opts, 20_000).unwrap();
     for (a, b) in alone[0].rgb.iter().zip(&one[1].rgb) {
         assert!((a - b).abs() <= 1e-6 * (1.0 + b.abs()), "{a} vs {b}");
     }

@@ -384,8 +384,8 @@ fn steering_keeps_the_expectation_and_reduces_variance() {
     const SAMPLES: u64 = 10_000;
     let mask = footprint_mask(&shadow_scene(), Some(0));
     for name in ["ball.radius"] {
-        let mut scene = shadow_scene();
-        scene.select_parameters(&[name.to_string()]).unwrap();
+        let scene = shadow_scene();
+        let selection = scene.select(&[name]).unwrap();
         let mut runs = [Vec::new(), Vec::new()];
         let mut seconds = [0.0; 2];
         for (m, mode) in [TangentSampling::Uniform, TangentSampling::Steered]
@@ -394,9 +394,9 @@ fn steering_keeps_the_expectation_and_reduces_variance() {
         {
             for seed in 0..RUNS {
                 let start = Instant::now();
+                let options = diff_options(1, 100 + seed);
                 let out =
-                    render_secondary_with(&scene, 1, &diff_options(1, 100 + seed), SAMPLES, mode)
-                        .unwrap();
+                    render_secondary_with(&scene, &selection, &options, SAMPLES, mode).unwrap();
                 seconds[m] += start.elapsed().as_secs_f64();
                 let g = gray(&out[0]);
                 assert!(g.iter().all(|v| v.is_finite()));
@@ -552,16 +552,16 @@ fn environment_lit_complete_derivative_matches_finite_differences() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(0);
     let names = ["ball.center.y", "ball.radius"];
-    let mut scene = environment_scene();
-    scene.select_parameters(&names.map(String::from)).unwrap();
+    let scene = environment_scene();
+    let selection = scene.select(&names).unwrap();
     let floor = footprint_mask(&scene, Some(0));
     let ball = footprint_mask(&scene, Some(1));
     let all = vec![true; (SIZE * SIZE) as usize];
     let closed = floor_closed_form(&scene, &floor);
     let start = Instant::now();
+    let options = diff_options(16, 5 + seed);
     let out =
-        render_derivatives_with_boundary(&scene, 2, &diff_options(16, 5 + seed), 20_000, 60_000)
-            .unwrap();
+        render_derivatives_with_boundary(&scene, &selection, &options, 20_000, 60_000).unwrap();
     let t_ours = start.elapsed().as_secs_f64();
     let total = out.total();
     for (k, name) in names.iter().enumerate() {

@@ -345,8 +345,8 @@ fn smooth_union_field_changes_the_area_as_the_surface_does() {
         let area = |s: &Scene| area_and_its_derivative(s, lines, VelocityField::default()).0;
         let fd = (area(&plus) - area(&minus)) / (2.0 * h as f64);
         for field in [VelocityField::Carried, VelocityField::Normal] {
-            let mut scene = blended_balls(0.05);
-            scene.select_parameters(&[name.to_string()]).unwrap();
+            let plain = blended_balls(0.05);
+            let scene = plain.select(&[name]).unwrap().apply(&plain).unwrap();
             let (_, d) = area_and_its_derivative(&scene, lines, field);
             eprintln!("{name} {field:?}: ∫∂J dA {d:.5}, fd {fd:.5}");
             assert!(

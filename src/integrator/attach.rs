@@ -385,9 +385,8 @@ mod tests {
                "shapes": [{{"name": "s", "sdf": {sdf}, "bsdf": {{"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}}}}],
                "emitters": [{{"name": "sky", "type": "constant", "radiance": [1, 1, 1]}}]}}"#
         );
-        let mut scene = crate::scene::parse(&json, std::path::Path::new(".")).unwrap();
-        scene.select_parameters(&[param.to_string()]).unwrap();
-        scene
+        let scene = crate::scene::parse(&json, std::path::Path::new(".")).unwrap();
+        scene.select(&[param]).unwrap().apply(&scene).unwrap()
     }
 
     /// Surface points of shape 0: the first crossing of rays from outside towards its centre region.

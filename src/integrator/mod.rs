@@ -17,35 +17,37 @@
 //!
 //! fn main() -> implicit_psdr::Result<()> {
 //!     // An image: the scene file, its samples per pixel, a seed.
-//!     let mut scene = scene::load(Path::new("scenes/sphere_floor.json"))?;
+//!     let scene = scene::load(Path::new("scenes/sphere_floor.json"))?;
 //!     let options = RenderOptions { spp: 16, seed: 0, ..RenderOptions::default() };
 //!     let (image, stats) = integrator::render(&scene, &options);
 //!     println!("{} exhausted rays", stats.exhausted_rays);
 //!
-//!     // Derivative images: select parameters (slot k = the k-th name), then the complete derivative
-//!     // (interior + primary + secondary terms) with the default pixel normalisation and budgets.
+//!     // Derivative images: a selection of parameters (derivative k = the k-th name; grid directions
+//!     // with `scene.select_with_grid_directions`), then the complete derivative (interior + primary +
+//!     // secondary terms) with the default pixel normalisation and budgets.
 //!     let params = ["ball.radius".to_string(), "light.center.x".to_string()];
-//!     scene.select_parameters(&params)?;
-//!     let d = integrator::render_derivatives(&scene, params.len(), &DiffOptions {
+//!     let selection = scene.select(&params)?;
+//!     let d = integrator::render_derivatives(&scene, &selection, &DiffOptions {
 //!         render: options.clone(),
 //!         ..DiffOptions::default()
 //!     })?;
 //!     // d.image is `image`; d.total()[k] is d image / d params[k]; d.interior, d.primary and
 //!     // d.secondary hold the terms. The channels `diff --terms` writes:
-//!     let channels = d.channels(&params, true);
+//!     let channels = d.channels(selection.names(), true);
 //!     let out = std::env::temp_dir().join("d.exr");
 //!     film::write_exr(&out, image.width, image.height, &channels)?;
 //!
 //!     // A gradient (reverse mode): the loss of the image against a target and its gradient with
-//!     // respect to named parameters and whole grids (`GradientLayout::select(&mut scene, &params,
+//!     // respect to named parameters and whole grids (`GradientLayout::select(&scene, &params,
 //!     // &["blob".into()])`), all terms, at once. The entries follow the layout: named parameters
 //!     // first, then each grid's values.
 //!     let target = film::read_exr_rgb(&out)?;
-//!     let layout = integrator::GradientLayout::select(&mut scene, &params, &[])?;
+//!     let layout = integrator::GradientLayout::select(&scene, &params, &[])?;
 //!     let g = integrator::loss_gradient(&scene, &layout, &target, integrator::Loss::L2,
 //!                                       &DiffOptions { render: options, ..DiffOptions::default() })?;
 //!     println!("loss {} d loss / d ball.radius {}", g.loss, g.gradient.total()[0]);
-//!     // A new surface without reloading: `scene.set_grid_values("blob", values)?`, then render again.
+//!     // A new surface without reloading: `scene.set_grid_values("blob", values)?` (on a `mut` scene),
+//!     // then render again with the same selection.
 //!     Ok(())
 //! }
 //! ```

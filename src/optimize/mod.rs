@@ -129,7 +129,7 @@ impl Optimization {
     /// Checks the problem (a target per view, of the scene's image size; known parameters and grids;
     /// at least one of them) and selects the parameters.
     pub fn new(
-        mut scene: Scene,
+        scene: Scene,
         views: Vec<View>,
         targets: Vec<Image>,
         settings: Settings,
@@ -163,7 +163,7 @@ impl Optimization {
                 "nothing to optimise: name grids or params",
             ));
         }
-        let layout = GradientLayout::select(&mut scene, &settings.params, &settings.grids)?;
+        let layout = GradientLayout::select(&scene, &settings.params, &settings.grids)?;
         let adam = Adam::new(layout.entries);
         Ok(Self {
             scene,
@@ -315,11 +315,8 @@ impl Optimization {
             self.scene.set_grid(node, data)?;
         }
         if upsample {
-            self.layout = GradientLayout::select(
-                &mut self.scene,
-                &self.settings.params,
-                &self.settings.grids,
-            )?;
+            self.layout =
+                GradientLayout::select(&self.scene, &self.settings.params, &self.settings.grids)?;
             self.adam = Adam::new(self.layout.entries);
         }
         Ok(())

@@ -52,7 +52,7 @@ pub(crate) fn grad<'py>(
     velocity_field: &str,
     threads: Option<usize>,
 ) -> PyResult<(Option<f64>, Bound<'py, PyDict>)> {
-    let mut scene = scene.scene.clone();
+    let scene = scene.scene.clone();
     let size = (scene.camera.width, scene.camera.height);
     let loss: Loss = loss
         .parse()
@@ -78,7 +78,7 @@ pub(crate) fn grad<'py>(
         (normalization, velocity_field),
     )?;
     let grids: Vec<String> = grids.iter().map(|g| scene.grid_node(g)).collect();
-    let layout = GradientLayout::select(&mut scene, &params, &grids).map_err(scene_error)?;
+    let layout = GradientLayout::select(&scene, &params, &grids).map_err(scene_error)?;
     let chosen = layout.clone();
     let (loss, gradient) = run_detached(py, threads, move || match against {
         Against::Target(target) => {

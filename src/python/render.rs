@@ -117,7 +117,7 @@ pub(crate) fn diff<'py>(
     velocity_field: &str,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut scene = scene.scene.clone();
+    let scene = scene.scene.clone();
     let options = diff_options(
         &scene,
         (spp, seed),
@@ -141,16 +141,12 @@ pub(crate) fn diff<'py>(
             "diff: nothing to differentiate (give params or grid_directions)",
         ));
     }
-    scene.select_parameters(&params).map_err(scene_error)?;
-    // Grid directions take the slots after the named parameters, as in the command-line tool.
-    let mut names = params;
-    let blocks = scene
-        .select_grid_directions(names.len(), &directions)
+    let selection = scene
+        .select_with_grid_directions(&params, &directions)
         .map_err(scene_error)?;
-    names.extend(blocks);
-    let count = names.len();
+    let names = selection.names().to_vec();
     let result = run_detached(py, threads, move || {
-        integrator::render_derivatives(&scene, count, &options)
+        integrator::render_derivatives(&scene, &selection, &options)
     })?
     .map_err(scene_error)?;
     warn(py, &result.stats)?;

@@ -9,15 +9,15 @@ use crate::integrator::{
     BoundaryBudget, DerivativeImages, DiffOptions, RenderOptions, render,
     render_derivatives_with_boundary, render_interior,
 };
-use crate::scene::Scene;
+use crate::scene::{Scene, Selection};
 
 /// A scene and, for the derivative estimators, the parameter they differentiate.
 #[derive(Clone, Debug)]
 pub struct Subject {
-    /// The scene as loaded (no parameter selected): what `fd` and `primal` render.
+    /// The scene as loaded: what every estimator renders.
     plain: Scene,
-    /// The scene with the parameter in derivative slot 0; `None` for the image itself.
-    selected: Option<Scene>,
+    /// The parameter as the derivative estimators' selection; `None` for the image itself.
+    selected: Option<Selection>,
     /// The parameter, `None` for the image.
     parameter: Option<String>,
     /// `fd`'s step: the default step of the parameter's value ([`fd::default_step`]).
@@ -39,8 +39,7 @@ impl Subject {
     /// near matches).
     pub fn derivative(scene: &Scene, parameter: &str) -> Result<Self> {
         let value = fd::parameter_value(scene, parameter)?;
-        let mut selected = scene.clone();
-        selected.select_parameters(&[parameter.to_string()])?;
+        let selected = scene.select(&[parameter])?;
         Ok(Self {
             plain: scene.clone(),
             selected: Some(selected),
@@ -104,20 +103,21 @@ impl Subject {
         spp: u32,
         seed: u64,
     ) -> Result<DerivativeImages> {
-        let scene = self.selected.as_ref().ok_or_else(no_parameter)?;
+        let selection = self.selected.as_ref().ok_or_else(no_parameter)?;
+        let scene = &self.plain;
         let options = DiffOptions {
             render: render_options(spp, seed),
             ..DiffOptions::default()
         };
         match estimator.boundary_scale() {
-            None => render_interior(scene, 1, &options),
+            None => render_interior(scene, selection, &options),
             Some((num, den)) => {
                 let (primary, secondary) = BoundaryBudget::default().totals(scene, spp);
                 // At least one sample each, so that a quarter of a tiny budget still samples the term.
                 let scale = |n: u64| (n * num / den).max(1);
                 render_derivatives_with_boundary(
                     scene,
-                    1,
+                    selection,
                     &options,
                     scale(primary),
                     scale(secondary),

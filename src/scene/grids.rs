@@ -44,7 +44,7 @@ pub enum ParameterEntry {
     Grid(GridBlock),
 }
 
-/// A forward-mode direction for a grid node's values ([`Scene::select_grid_directions`]): a
+/// A forward-mode direction for a grid node's values ([`Scene::select_with_grid_directions`]): a
 /// perturbation of each value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridDirection {
@@ -148,53 +148,6 @@ impl Scene {
             .map_or_else(|| text.to_string(), |b| b.node.clone())
     }
 
-    /// Selects the forward-mode `directions` of grid values in derivative slots `first_slot`,
-    /// `first_slot + 1`, ... (every other grid constant); returns their blocks' names (`NODE.values`),
-    /// the names of their derivatives. Errors (on the field `grid_directions`): an unknown or repeated
-    /// node, a direction whose shape is not the grid's (naming its
-    /// source and both shapes); on error the scene is unchanged.
-    pub fn select_grid_directions(
-        &mut self,
-        first_slot: usize,
-        directions: &[GridDirection],
-    ) -> Result<Vec<String>> {
-        let blocks = self.grid_blocks();
-        let mut selection: Vec<(String, GridValues)> = Vec::new();
-        let mut names = Vec::new();
-        for (k, direction) in directions.iter().enumerate() {
-            let node = self.grid_node(&direction.node);
-            let Some(block) = blocks.iter().find(|b| b.node == node) else {
-                return Err(match self.unknown_grid(&node) {
-                    Error::Field { message, .. } => Error::field("grid_directions", message),
-                    e => e,
-                });
-            };
-            if selection.iter().any(|(n, _)| *n == node) {
-                return Err(Error::field(
-                    "grid_directions",
-                    format!("grid {node:?} is given twice"),
-                ));
-            }
-            if direction.shape != block.shape {
-                let [nz, ny, nx] = direction.shape;
-                return Err(Error::file(
-                    &direction.source,
-                    format!(
-                        "shape [{nz}, {ny}, {nx}], but grid {node:?} has shape {:?} (a direction \
-                         has one value per grid value)",
-                        block.shape
-                    ),
-                ));
-            }
-            let slot = (first_slot + k) as u32;
-            let u = direction.values.clone();
-            selection.push((node, GridValues::Direction { slot, u }));
-            names.push(block.name.clone());
-        }
-        self.select_grids(&selection)?;
-        Ok(names)
-    }
-
     /// Grid node `node`'s values and box.
     fn grid(&self, node: &str) -> Result<(Arc<GridData>, [glam::Vec3; 2])> {
         let mut found = None;
@@ -232,21 +185,17 @@ impl Scene {
     }
 
     /// Replaces grid node `node`'s samples by `data` (any dimensions; same box) and recomputes what
-    /// depends on them. If the dimensions change, the node's selection is cleared (its gradient entries
-    /// no longer fit): select it again.
+    /// depends on them. A [`super::Selection`] of the node's gradient block made before a change of
+    /// dimensions no longer fits: select again.
     pub fn set_grid(&mut self, node: &str, data: GridData) -> Result<()> {
-        let old = self.grid_values(node)?;
+        self.grid_values(node)?;
         data.validate(&format!("{node}.values"))?;
-        let resized = data.dims != old.dims;
         let data = Arc::new(data);
         for shape in &mut self.shapes {
             let prefix = root_prefix(&shape.name, &shape.sdf);
-            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, s, _| {
+            walk_mut(&mut shape.sdf, &prefix, &mut |n, d, _, _| {
                 if n == node {
                     *d = data.clone();
-                    if resized {
-                        *s = GridValues::Constant;
-                    }
                 }
             });
         }
@@ -261,7 +210,7 @@ impl Scene {
 
     /// Replaces the values of grid node `node` (same layout: `values[(z · ny + y) · nx + x]`, as many
     /// as before, all finite) and recomputes what depends on them (bounds, Lipschitz bounds, tracer
-    /// tolerance), keeping every selection: the next render sees the new surface.
+    /// tolerance): the next render sees the new surface.
     pub fn set_grid_values(&mut self, node: &str, values: Vec<f32>) -> Result<()> {
         let old = self.grid_values(node)?;
         let data = GridData::new(old.dims, values, &format!("{node}.values"))?;
@@ -281,7 +230,7 @@ impl Scene {
     /// Sets the selection of the grid nodes named in `selection` (`(node, how)`), every other grid's
     /// to constant. Errors: an unknown node, a node given twice, a direction whose length is not the
     /// grid's; on error the scene is unchanged.
-    pub fn select_grids(&mut self, selection: &[(String, GridValues)]) -> Result<()> {
+    pub(crate) fn select_grids(&mut self, selection: &[(String, GridValues)]) -> Result<()> {
         let blocks = self.grid_blocks();
         for (k, (node, how)) in selection.iter().enumerate() {
             let Some(block) = blocks.iter().find(|b| &b.node == node) else {
@@ -320,7 +269,7 @@ impl Scene {
     }
 
     /// The error for an unknown grid node: the scene's grid nodes.
-    fn unknown_grid(&self, node: &str) -> Error {
+    pub(super) fn unknown_grid(&self, node: &str) -> Error {
         let nodes: Vec<String> = self.grid_blocks().into_iter().map(|b| b.node).collect();
         let known = if nodes.is_empty() {
             "the scene has no grid".to_string()

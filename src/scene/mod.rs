@@ -6,10 +6,12 @@ mod integrator_kind;
 pub(crate) mod json;
 mod params;
 pub mod patch;
+mod selection;
 
 pub use grids::{GridBlock, GridDirection, ParameterEntry};
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
+pub use selection::Selection;
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;

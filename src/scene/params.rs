@@ -76,8 +76,8 @@ impl Scene {
     }
 
     /// [`Scene::visit_params`] with mutable access. Changing a value this way does not update derived
-    /// data (bounds, Lipschitz bounds, tolerance): use [`Scene::with_parameter`] for that. Changing slots
-    /// is what [`Scene::select_parameters`] does.
+    /// data (bounds, Lipschitz bounds, tolerance): use [`Scene::with_parameter`] for that. Setting slots
+    /// is what [`super::Selection::apply`] does.
     pub fn visit_params_mut(&mut self, f: &mut dyn FnMut(&str, &mut Param)) {
         scene_params_mut(self, f);
     }
@@ -147,7 +147,7 @@ impl Scene {
     /// Differentiates with respect to `names`: `names[k]` gets derivative slot `k`, every other parameter
     /// none. An unknown name is an error listing near matches, and so is a name given twice; on error the
     /// scene is unchanged.
-    pub fn select_parameters(&mut self, names: &[String]) -> Result<()> {
+    pub(crate) fn select_parameters(&mut self, names: &[String]) -> Result<()> {
         for (k, name) in names.iter().enumerate() {
             if names[..k].contains(name) {
                 return Err(Error::field(
@@ -177,7 +177,7 @@ impl Scene {
     /// The value must be finite and satisfy the scene file's rules for its field (a radius `> 0`, a
     /// rounding in `[0, min half size]`, a torus's major radius above its minor one, an albedo in `[0, 1]`,
     /// a radiance `>= 0`, a valid camera, ...). Only rules that the change breaks are reported: a scene
-    /// built in code with some other field out of range can still be changed elsewhere. Slots are kept.
+    /// built in code with some other field out of range can still be changed elsewhere.
     /// The tracer settings other than the tolerance `eps` (which follows the scene's scale as in
     /// [`Scene::new`]) are kept.
     pub fn with_parameter(&self, name: &str, value: f32) -> Result<Scene> {

@@ -133,16 +133,14 @@ pub fn derivative_terms_with(
     seed: u64,
     velocity: VelocityField,
 ) -> Vec<Terms> {
-    let mut scene = scene.clone();
-    let owned: Vec<String> = names.iter().map(|s| s.to_string()).collect();
-    scene.select_parameters(&owned).unwrap();
+    let selection = scene.select(names).unwrap();
     let options = DiffOptions {
         velocity,
         ..diff_options(spp, seed)
     };
     let out = render_derivatives_with_boundary(
-        &scene,
-        names.len(),
+        scene,
+        &selection,
         &options,
         primary_samples,
         secondary_samples,

@@ -6,25 +6,25 @@ use crate::{diff_options, in_file, output_paths, prepare, warn, write_derivative
 use anyhow::Result;
 use implicit_psdr::integrator;
 use implicit_psdr::io;
-use implicit_psdr::scene::{GridDirection, Scene};
+use implicit_psdr::scene::GridDirection;
 use std::path::PathBuf;
 use std::sync::Arc;
 
 pub(crate) fn diff(args: &DiffArgs) -> Result<()> {
     let paths = output_paths(&args.outputs, "diff")?;
-    let (mut scene, render) = prepare(&args.scene)?;
+    let (scene, render) = prepare(&args.scene)?;
     let file = in_file(&args.scene.scene);
-    scene.select_parameters(&args.params).map_err(&file)?;
-    // Grid directions take the slots after the named parameters, and their blocks' names.
-    let mut names = args.params.clone();
-    names.extend(select_directions(&mut scene, names.len(), &args.grid_directions).map_err(&file)?);
+    let directions = read_directions(&args.grid_directions).map_err(&file)?;
+    let selection =
+        (scene.select_with_grid_directions(&args.params, &directions)).map_err(&file)?;
+    let names = selection.names();
     let options = diff_options(render, &args.estimator);
     let count = names.len();
-    let result = integrator::render_derivatives(&scene, count, &options).map_err(&file)?;
+    let result = integrator::render_derivatives(&scene, &selection, &options).map_err(&file)?;
     let image = &result.image;
     outln!("note: {}", result.note(&scene.unsampled_creases()))?;
-    let channels = result.channels(&names, args.terms);
-    write_derivatives(&paths, image, &channels, &names, &result.total())?;
+    let channels = result.channels(names, args.terms);
+    write_derivatives(&paths, image, &channels, names, &result.total())?;
     outln!(
         "rendered {}x{} and {count} derivative image{} at {} spp in {:.2} s; wrote {} and {}",
         image.width,
@@ -39,14 +39,11 @@ pub(crate) fn diff(args: &DiffArgs) -> Result<()> {
     Ok(())
 }
 
-/// Selects the forward-mode directions `(node, U.npy)` of `diff --grid-direction`, in derivative slots
-/// `first_slot`, `first_slot + 1`, ...; returns their blocks' names (`NODE.values`). Errors: an
-/// unreadable U, and those of [`Scene::select_grid_directions`] (a U of another shape names its file).
-pub(crate) fn select_directions(
-    scene: &mut Scene,
-    first_slot: usize,
+/// The forward-mode directions `(node, U.npy)` of `diff --grid-direction`, read. Errors: an
+/// unreadable U (a U of another shape than its grid is reported when selected, naming its file).
+fn read_directions(
     directions: &[(String, PathBuf)],
-) -> Result<Vec<String>, implicit_psdr::Error> {
+) -> Result<Vec<GridDirection>, implicit_psdr::Error> {
     let mut read = Vec::new();
     for (node, file) in directions {
         let u = io::read_npy(file)?;
@@ -58,5 +55,5 @@ pub(crate) fn select_directions(
             source: file.display().to_string(),
         });
     }
-    scene.select_grid_directions(first_slot, &read)
+    Ok(read)
 }

@@ -99,11 +99,11 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     {
         bail!("--out {}: is the scene file", out.display());
     }
-    let (mut scene, render) = prepare(&args.scene)?;
+    let (scene, render) = prepare(&args.scene)?;
     let file = in_file(scene_path);
     let target = read_target(&args.target, (scene.camera.width, scene.camera.height))?;
     let grids: Vec<String> = args.grids.iter().map(|g| scene.grid_node(g)).collect();
-    let layout = GradientLayout::select(&mut scene, &args.params, &grids).map_err(&file)?;
+    let layout = GradientLayout::select(&scene, &args.params, &grids).map_err(&file)?;
     let grid_paths: Vec<PathBuf> = (layout.grids.iter())
         .map(|(block, _)| grid_output(out, block))
         .collect();

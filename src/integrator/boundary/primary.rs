@@ -121,25 +121,25 @@ use crate::integrator::silhouette_curve::{
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::{Directions, dispatch_directions};
-use crate::scene::Scene;
+use crate::scene::{Scene, Selection};
 
 /// The random stream of primary boundary samples (distinct from the camera's and the secondary term's).
 pub const PRIMARY_STREAM: u64 = 0x9121_B0DA;
 
-/// The primary boundary term of the derivative with respect to the parameters in slots `0..count`
-/// (selected with [`Scene::select_parameters`]) for the `fixed` pixel normalisation, estimated with
+/// The primary boundary term of the derivative of `scene` with respect to the parameters of
+/// `selection` for the `fixed` pixel normalisation, estimated with
 /// `samples` silhouette samples for the whole image (see the [module docs](self)): the
 /// [`PrimaryTerm::radiance`] part of [`render_primary_terms`]. One image per parameter, the layout of
 /// [`crate::integrator::diff::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
-/// Errors: a box pixel filter, a failed curve extraction.
+/// Errors: a selection `scene` does not have, a box pixel filter, a failed curve extraction.
 pub fn render_primary(
     scene: &Scene,
-    count: usize,
+    selection: &Selection,
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    Ok(render_primary_terms(scene, count, options, samples)?.radiance)
+    Ok(render_primary_terms(scene, selection, options, samples)?.radiance)
 }
 
 /// Both parts of the primary boundary term, from one set of silhouette samples: the radiance jump
@@ -172,10 +172,20 @@ impl PrimaryTerm {
     }
 }
 
-/// [`PrimaryTerm`] with the parameters in slots `0..count`; `samples` boundary samples for the whole
+/// [`PrimaryTerm`] with the parameters of `selection`; `samples` boundary samples for the whole
 /// image, shared by shape silhouettes, emitter outlines and crease edges ([`PrimarySources`]), in
-/// passes of the widest dual number `count` needs. Errors as [`render_primary`].
+/// passes of the widest dual number the selection needs. Errors as [`render_primary`].
 pub fn render_primary_terms(
+    scene: &Scene,
+    selection: &Selection,
+    options: &DiffOptions,
+    samples: u64,
+) -> Result<PrimaryTerm> {
+    primary_terms(&selection.apply(scene)?, selection.len(), options, samples)
+}
+
+/// [`render_primary_terms`] of a scene with its selection applied, slots `0..count`.
+pub(crate) fn primary_terms(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,

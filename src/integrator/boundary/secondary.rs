@@ -136,41 +136,42 @@ use crate::integrator::surface_sampling::{SurfaceSample, sample_surface};
 use crate::math::Ray;
 use crate::sampler::Sampler;
 use crate::scalar::{Directions, dispatch_directions};
-use crate::scene::{Intersection, Scene};
+use crate::scene::{Intersection, Scene, Selection};
 
 /// The random stream of boundary samples (distinct from the camera's
 /// [`crate::integrator::CAMERA_STREAM`]).
 pub const BOUNDARY_STREAM: u64 = 0x5EC0_4DA2;
 
-/// The secondary boundary term of the derivative with respect to the parameters in slots `0..count`
-/// (selected with [`Scene::select_parameters`]), estimated with `samples` boundary samples for the whole
+/// The secondary boundary term of the derivative of `scene` with respect to the parameters of
+/// `selection`, estimated with `samples` boundary samples for the whole
 /// image (see the [module docs](self)). One image per parameter, the layout of
 /// [`crate::integrator::diff::DerivativeImages::interior`]; the seed is `options.render.seed`.
 ///
-/// Errors: a box pixel filter.
+/// Errors: a selection `scene` does not have, a box pixel filter.
 pub fn render_secondary(
     scene: &Scene,
-    count: usize,
+    selection: &Selection,
     options: &DiffOptions,
     samples: u64,
 ) -> Result<Vec<Image>> {
-    render_secondary_with(scene, count, options, samples, TangentSampling::Steered)
+    render_secondary_with(scene, selection, options, samples, TangentSampling::Steered)
 }
 
 /// [`render_secondary`] with a chosen way of drawing the tangent angles `θ_B` (the default,
 /// [`TangentSampling::Steered`], has less variance; both have the same expectation).
 pub fn render_secondary_with(
     scene: &Scene,
-    count: usize,
+    selection: &Selection,
     options: &DiffOptions,
     samples: u64,
     tangent: TangentSampling,
 ) -> Result<Vec<Image>> {
-    Ok(secondary_term(scene, count, options, samples, tangent)?.0)
+    let selected = selection.apply(scene)?;
+    Ok(secondary_term(&selected, selection.len(), options, samples, tangent)?.0)
 }
 
-/// [`render_secondary_with`] with the counts of the traced rays, in passes of the widest dual number
-/// `count` needs.
+/// [`render_secondary_with`] of a scene with its selection applied (slots `0..count`), with the counts
+/// of the traced rays, in passes of the widest dual number `count` needs.
 pub(crate) fn secondary_term(
     scene: &Scene,
     count: usize,

@@ -6,7 +6,7 @@
 //! random stream and hands its contributions to a [`SampleSink`]. [`run_source`] runs its samples in
 //! parallel chunks on the [`driver`]; [`run_term`] shares a term's budget between its sources
 //! (equally, the first ones taking the remainder) and gives each a film of its own, which the caller turns into images (forward
-//! mode, [`term_images`]) or into gradient entries (reverse mode). A term lists its sources in one
+//! mode, `term_images`) or into gradient entries (reverse mode). A term lists its sources in one
 //! place ([`BoundaryTerm::sources`]).
 
 use crate::film::{Film, Image, SampleSink, SplatFilm};
@@ -150,11 +150,12 @@ where
     stats
 }
 
-/// Forward mode: `term`'s images for the parameters in slots `0..count` of `scene`, `samples` for the
+/// Forward mode: `term`'s images for the parameters in slots `0..count` of `scene` (a scene with its
+/// [`crate::scene::Selection`] applied), `samples` for the
 /// whole image, in passes of `S::COUNT` parameters. Each source's splats are summed in `f64` in sample
 /// order and their mean added to `radiance[k]` and, with `coverage`, to `coverage[k]` (the same value
 /// in the three channels; empty without it), source by source.
-pub fn term_images<S: Directions>(
+pub(crate) fn term_images<S: Directions>(
     scene: &Scene,
     count: usize,
     options: &DiffOptions,

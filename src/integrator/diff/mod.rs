@@ -1,8 +1,8 @@
 //! Forward-mode derivative images: the orchestrator of the complete derivative, interior term
 //! ([`interior`]) plus the primary and secondary boundary terms ([`crate::integrator::boundary`]).
 //!
-//! Parameters are selected with [`Scene::select_parameters`] (slots `0..count`) and processed in passes
-//! of the scalar type's width (`DualN<N>` carries `N` directions); each pass traces the same paths
+//! Parameters are selected with [`Scene::select`] (a [`Selection`], derivative `k` in slot `k`) and
+//! processed in passes of the scalar type's width (`DualN<N>` carries `N` directions); each pass traces the same paths
 //! (same seed), so passes agree on the image and on shared parameters.
 
 pub mod interior;
@@ -14,7 +14,7 @@ use crate::integrator::boundary::{primary, secondary};
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::DiffOptions;
 use crate::scalar::dispatch_directions;
-use crate::scene::Scene;
+use crate::scene::{Scene, Selection};
 
 /// The image and one derivative image per selected parameter, term by term.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,38 +33,80 @@ pub struct DerivativeImages {
     pub stats: RenderStats,
 }
 
-/// The image and the complete derivative (interior, primary and secondary terms) with respect to the
-/// parameters in slots `0..count`, with the boundary budgets of `options.boundary` (samples per pixel;
-/// a term with budget 0 is skipped). Errors: a box pixel filter, a failed silhouette extraction.
+/// The image and the complete derivative (interior, primary and secondary terms) of `scene` with
+/// respect to the parameters of `selection`, with the boundary budgets of `options.boundary` (samples
+/// per pixel; a term with budget 0 is skipped). Errors: a selection `scene` does not have, a box pixel
+/// filter, a failed silhouette extraction.
 pub fn render_derivatives(
     scene: &Scene,
-    count: usize,
+    selection: &Selection,
     options: &DiffOptions,
 ) -> Result<DerivativeImages> {
-    let (primary, secondary) = options.boundary.totals(scene, options.render.spp);
-    render_derivatives_with_boundary(scene, count, options, primary, secondary)
+    let selected = selection.apply(scene)?;
+    let (primary, secondary) = options.boundary.totals(&selected, options.render.spp);
+    derivatives(&selected, selection.len(), options, primary, secondary)
 }
 
 /// The image and the interior term alone (the boundary budgets of `options` are ignored): what
 /// renderers without boundary terms return, biased wherever edges move.
 ///
-/// Dispatches on `count` to `DualN<1|2|4|8>`; more than eight parameters take several passes of eight.
+/// Dispatches on the number of derivatives to `DualN<1|2|4|8>`; more than eight take several passes
+/// of eight. Errors: a selection `scene` does not have.
 pub fn render_interior(
     scene: &Scene,
-    count: usize,
+    selection: &Selection,
     options: &DiffOptions,
 ) -> Result<DerivativeImages> {
-    dispatch_directions!(count, render_interior_in(scene, count, options))
+    interior_images(&selection.apply(scene)?, selection.len(), options)
 }
 
 /// [`render_interior`] with a chosen scalar type `S`, in passes of `S::COUNT` parameters.
 pub fn render_interior_in<S: crate::scalar::Directions>(
     scene: &Scene,
+    selection: &Selection,
+    options: &DiffOptions,
+) -> Result<DerivativeImages> {
+    interior_images_in::<S>(&selection.apply(scene)?, selection.len(), options)
+}
+
+/// The interior term plus the boundary terms with explicit budgets for the whole image:
+/// `primary_samples` silhouette samples and `secondary_samples` boundary samples (0 skips a term).
+/// Errors as [`render_derivatives`].
+pub fn render_derivatives_with_boundary(
+    scene: &Scene,
+    selection: &Selection,
+    options: &DiffOptions,
+    primary_samples: u64,
+    secondary_samples: u64,
+) -> Result<DerivativeImages> {
+    let selected = selection.apply(scene)?;
+    let count = selection.len();
+    derivatives(
+        &selected,
+        count,
+        options,
+        primary_samples,
+        secondary_samples,
+    )
+}
+
+/// [`render_interior`] of a scene with its selection applied, slots `0..count`.
+fn interior_images(
+    selected: &Scene,
+    count: usize,
+    options: &DiffOptions,
+) -> Result<DerivativeImages> {
+    dispatch_directions!(count, interior_images_in(selected, count, options))
+}
+
+/// [`render_interior_in`] of a scene with its selection applied, slots `0..count`.
+fn interior_images_in<S: crate::scalar::Directions>(
+    selected: &Scene,
     count: usize,
     options: &DiffOptions,
 ) -> Result<DerivativeImages> {
     let start = std::time::Instant::now();
-    let (image, interior, mut stats) = interior::images::<S>(scene, count, options)?;
+    let (image, interior, mut stats) = interior::images::<S>(selected, count, options)?;
     stats.seconds = start.elapsed().as_secs_f64();
     Ok(DerivativeImages {
         image,
@@ -75,26 +117,25 @@ pub fn render_interior_in<S: crate::scalar::Directions>(
     })
 }
 
-/// The interior term plus the boundary terms with explicit budgets for the whole image:
-/// `primary_samples` silhouette samples and `secondary_samples` boundary samples (0 skips a term).
-pub fn render_derivatives_with_boundary(
-    scene: &Scene,
+/// [`render_derivatives_with_boundary`] of a scene with its selection applied, slots `0..count`.
+fn derivatives(
+    selected: &Scene,
     count: usize,
     options: &DiffOptions,
     primary_samples: u64,
     secondary_samples: u64,
 ) -> Result<DerivativeImages> {
     let start = std::time::Instant::now();
-    let mut out = render_interior(scene, count, options)?;
+    let mut out = interior_images(selected, count, options)?;
     if secondary_samples > 0 {
         let steered = TangentSampling::Steered;
         let (images, stats) =
-            secondary::secondary_term(scene, count, options, secondary_samples, steered)?;
+            secondary::secondary_term(selected, count, options, secondary_samples, steered)?;
         out.secondary = images;
         out.stats.absorb(stats);
     }
     if primary_samples > 0 {
-        let term = primary::render_primary_terms(scene, count, options, primary_samples)?;
+        let term = primary::primary_terms(selected, count, options, primary_samples)?;
         out.primary = term.combine(&out.image, options.normalization);
         out.stats.absorb(term.stats);
     }

@@ -33,10 +33,10 @@ use crate::integrator::driver::RenderStats;
 use crate::integrator::options::{DiffOptions, RenderOptions, require_continuous_filter};
 use crate::integrator::primal::render;
 use crate::scalar::{GridValues, MAX_GRADIENT_ENTRY, Rev};
-use crate::scene::{GridBlock, Scene};
+use crate::scene::{GridBlock, Scene, Selection};
 
-/// Where each selected parameter sits in the gradient: named parameters first (entry `k` for the `k`-th
-/// name), then each selected grid's values as a block.
+/// Reverse mode's selection: where each selected parameter sits in the gradient, named parameters
+/// first (entry `k` for the `k`-th name), then each selected grid's values as a block.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GradientLayout {
     /// The named parameters, in entry order.
@@ -45,21 +45,21 @@ pub struct GradientLayout {
     pub grids: Vec<(GridBlock, usize)>,
     /// Total number of entries.
     pub entries: usize,
+    /// The selection the estimators apply to the scene.
+    selection: Selection,
 }
 
 impl GradientLayout {
     /// Selects `params` (names as [`Scene::parameters`] lists them) and the values of the grid nodes
     /// `grids` (as [`Scene::grid_blocks`] lists them) of `scene` for reverse mode. Errors: unknown or
-    /// repeated names; more entries than a gradient can index. On error the scene may be partly
-    /// selected.
-    pub fn select(scene: &mut Scene, params: &[String], grids: &[String]) -> Result<Self> {
-        scene.select_parameters(params)?;
+    /// repeated names; more entries than a gradient can index.
+    pub fn select(scene: &Scene, params: &[String], grids: &[String]) -> Result<Self> {
         let blocks = scene.grid_blocks();
         let mut entries = params.len();
         let mut chosen = Vec::new();
         let mut selection = Vec::new();
         for node in grids {
-            // Unknown and repeated nodes are reported by `select_grids` below.
+            // Unknown and repeated nodes are reported by `Selection::new` below.
             if let Some(block) = blocks.iter().find(|b| &b.node == node)
                 && !chosen
                     .iter()
@@ -83,12 +83,33 @@ impl GradientLayout {
                 ));
             }
         }
-        scene.select_grids(&selection)?;
+        let selection = Selection::new(scene, params.to_vec(), selection, params.to_vec())?;
         Ok(Self {
             params: params.to_vec(),
             grids: chosen,
             entries,
+            selection,
         })
+    }
+
+    /// A copy of `scene` with the layout's entries selected. Errors: a parameter or grid `scene` does
+    /// not have, a grid whose dimensions changed since the layout was made (select again).
+    fn apply(&self, scene: &Scene) -> Result<Scene> {
+        let blocks = scene.grid_blocks();
+        for (block, _) in &self.grids {
+            if let Some(now) = blocks.iter().find(|b| b.node == block.node)
+                && now.shape != block.shape
+            {
+                return Err(Error::field(
+                    "grids",
+                    format!(
+                        "grid {:?} has shape {:?}, but was selected with shape {:?}: select it again",
+                        block.node, now.shape, block.shape
+                    ),
+                ));
+            }
+        }
+        self.selection.apply(scene)
     }
 }
 
@@ -118,17 +139,19 @@ impl Gradient {
     }
 }
 
-/// The gradient of `Σ_j g_j · I_j` with respect to the parameters of `layout` (selected in `scene` by
+/// The gradient of `Σ_j g_j · I_j` of `scene` with respect to the parameters of `layout` (made by
 /// [`GradientLayout::select`]), `g` = `adjoint`, with the samples of `options.render` (seed, spp) and
 /// the boundary budgets of `options.boundary`: `Σ_j g_j · ∂I_j` for the complete derivative images of
 /// the same seed (with the differentiable normalisation, the image of the same samples is rendered
-/// first). Errors: a box pixel filter, an adjoint of another size, a failed silhouette extraction.
+/// first). Errors: a layout `scene` does not fit, a box pixel filter, an adjoint of another size, a
+/// failed silhouette extraction.
 pub fn render_gradient(
     scene: &Scene,
     layout: &GradientLayout,
     adjoint: &Image,
     options: &DiffOptions,
 ) -> Result<Gradient> {
+    let scene = &layout.apply(scene)?;
     let image = match options.normalization {
         Normalization::Differentiable => Some(render(scene, &options.render)),
         Normalization::Fixed => None,
@@ -144,7 +167,8 @@ pub fn render_gradient(
 
 /// [`render_gradient`] with the pixel values `image` in the differentiable normalisation's `∂F − I ∂W`
 /// (ignored with the fixed one): the adjoint pass's own image, or one independent of its samples
-/// (module docs). Errors as [`render_gradient`], and an image of another size.
+/// (module docs); `scene` has the layout applied. Errors as [`render_gradient`], and an image of
+/// another size.
 fn gradient_with_image(
     scene: &Scene,
     layout: &GradientLayout,
@@ -278,6 +302,7 @@ pub fn loss_gradient(
     options: &DiffOptions,
 ) -> Result<LossGradient> {
     let start = std::time::Instant::now();
+    let scene = &layout.apply(scene)?;
     let (image, loss_stats) = render(scene, &options.render);
     let (value, adjoint) = loss.evaluate(&image, target, "target")?;
     let loss_seconds = start.elapsed().as_secs_f64();
