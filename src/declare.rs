@@ -189,7 +189,12 @@ pub enum Value<N: 'static> {
     /// One child node, with prefix `<prefix>.<key>` unless named.
     Child(Access<N, N>),
     /// A non-empty list of child nodes, with prefixes `<prefix>.<key>.<i>` unless named.
-    Children(Access<N, Vec<N>>),
+    Children {
+        /// The list.
+        access: Access<N, Vec<N>>,
+        /// The exact number of children the kind takes (`None`: any number from one).
+        count: Option<usize>,
+    },
     /// A file, named relative to the scene file's folder, read into the node once its other fields
     /// are read and valid (a file can be large).
     File {
@@ -317,7 +322,7 @@ macro_rules! walks {
                         let child = (access.$get)(node);
                         $walk(child, &format!("{prefix}.{}", field.key), f);
                     }
-                    Value::Children(access) => {
+                    Value::Children { access, .. } => {
                         let children = (access.$get)(node);
                         for (i, c) in IntoIterator::into_iter(children).enumerate() {
                             $walk(c, &format!("{prefix}.{}.{i}", field.key), f);
@@ -351,7 +356,7 @@ macro_rules! walks {
                     Value::Direction { .. }
                     | Value::Fixed { .. }
                     | Value::Child(_)
-                    | Value::Children(_)
+                    | Value::Children { .. }
                     | Value::File { .. } => {}
                 }
             }

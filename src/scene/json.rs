@@ -530,14 +530,23 @@ impl Context<'_> {
                 declare::Value::Child(access) => {
                     *(access.get_mut)(node) = child(self, o.req(key)?, &o.at(key))?;
                 }
-                declare::Value::Children(access) => {
+                declare::Value::Children { access, count } => {
                     let at = o.at(key);
                     let list = o.array(key)?;
-                    if list.is_empty() {
-                        return Err(Error::field(
-                            at,
-                            "must hold at least one node, got an empty array",
-                        ));
+                    match count {
+                        Some(n) if list.len() != *n => {
+                            return Err(Error::field(
+                                at,
+                                format!("must hold exactly {n} nodes, got {}", list.len()),
+                            ));
+                        }
+                        None if list.is_empty() => {
+                            return Err(Error::field(
+                                at,
+                                "must hold at least one node, got an empty array",
+                            ));
+                        }
+                        _ => {}
                     }
                     let children = (list.iter().enumerate())
                         .map(|(i, c)| child(self, c, &format!("{at}[{i}]")))

@@ -518,13 +518,13 @@ mod tests {
         let bsdf = Bsdf::Diffuse {
             albedo: Param3::new([0.5; 3]),
         };
-        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf));
+        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf.clone()));
         assert!(scene.creased_shapes().is_empty());
         assert!(scene.unsampled_creases().is_empty());
         scene.shapes.push(Shape::new(
             "crate",
             Sdf::cuboid([2.0, 0.0, 0.0], [0.5; 3], 0.0),
-            bsdf,
+            bsdf.clone(),
         ));
         let edges = scene.creased_shapes();
         assert_eq!(edges.len(), 12);
@@ -538,7 +538,7 @@ mod tests {
                 Sdf::sphere([0.0, 3.0, 0.0], 1.0),
                 Sdf::sphere([0.5, 3.0, 0.0], 1.0),
             ]),
-            bsdf,
+            bsdf.clone(),
         ));
         assert!(scene.unsampled_creases().is_empty());
         let edges = scene.creased_shapes();
@@ -565,7 +565,7 @@ mod tests {
                     offset: 0.0.into(),
                 },
             ]),
-            bsdf,
+            bsdf.clone(),
         ));
         assert_eq!(
             scene.unsampled_creases(),
@@ -601,9 +601,9 @@ mod tests {
             Sdf::sphere([0.0; 3], 1.0),
             Sdf::sphere([3.0, 0.0, 0.0], 1.0),
         ]);
-        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf));
+        let mut scene = scene_with(Shape::new("ball", Sdf::sphere([0.0; 3], 1.0), bsdf.clone()));
         for (name, sdf) in [("ring", ring), ("lens", lens), ("pair", pair)] {
-            scene.shapes.push(Shape::new(name, sdf, bsdf));
+            scene.shapes.push(Shape::new(name, sdf, bsdf.clone()));
         }
         let convex: Vec<bool> = scene.shapes.iter().map(|s| s.convex).collect();
         assert_eq!(convex, [true, false, true, false]);
@@ -621,11 +621,15 @@ mod tests {
         let bsdf = Bsdf::Diffuse {
             albedo: Param3::new([0.5; 3]),
         };
-        let moved = scene_with(Shape::new("a", Sdf::sphere([0.3, -0.2, 0.1], 1.0), bsdf));
+        let moved = scene_with(Shape::new(
+            "a",
+            Sdf::sphere([0.3, -0.2, 0.1], 1.0),
+            bsdf.clone(),
+        ));
         let translated = scene_with(Shape::translated(
             "a",
             Sdf::sphere([0.0, 0.0, 0.0], 1.0),
-            bsdf,
+            bsdf.clone(),
             Param3::new([0.3, -0.2, 0.1]),
         ));
         assert_eq!(moved.shapes[0].bounds, translated.shapes[0].bounds);

@@ -236,7 +236,10 @@ impl Scene {
         }
         for s in &self.shapes {
             sdf_violations(&s.sdf, &root_prefix(&s.name, &s.sdf), &mut out);
-            out.extend(s.bsdf.validate(FieldPath::Param(&s.name)));
+            // A blend's children are nodes of their own (`<shape>.bsdfs.<i>`).
+            declare::walk(&s.bsdf, &s.name, &mut |p, node| {
+                out.extend(node.validate(FieldPath::Param(p)))
+            });
         }
         for e in &self.emitters {
             out.extend(e.emitter.validate(FieldPath::Param(&e.name)));

@@ -278,7 +278,7 @@ impl Walk<'_> {
                         .ok_or_else(|| Error::field(&child_path, "missing in the scene JSON"))?;
                     self.node::<N>(child, &format!("{p}.{key}"), &child_path)?;
                 }
-                declare::Value::Children(_) => {
+                declare::Value::Children { .. } => {
                     let children_path = format!("{path}.{key}");
                     for (i, child) in array(o.get_mut(key), &children_path)?
                         .iter_mut()

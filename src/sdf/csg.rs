@@ -210,7 +210,10 @@ pub(super) mod kinds {
     const fn children(access: crate::declare::Access<Sdf, Vec<Sdf>>) -> Field<Sdf> {
         Field {
             key: "children",
-            value: Value::Children(access),
+            value: Value::Children {
+                access,
+                count: None,
+            },
         }
     }
 

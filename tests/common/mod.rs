@@ -108,6 +108,7 @@ impl Rng {
     }
 }
 
+pub mod chi2;
 pub mod deriv;
 pub mod hard_scenes;
 
