@@ -7,6 +7,9 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+/// Vertices `(n, 3)` and faces `(m, 3)` as numpy arrays.
+type MeshArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>);
+
 /// The surface of shape ``shape`` (a grid's at its level) as a closed triangle mesh in scene
 /// coordinates, extracted by dual contouring on a lattice of ``res`` points (4 to 1024) along the
 /// longest side of its bounds, as the ``mesh`` command does: ``(vertices, faces)``, float32
@@ -18,7 +21,7 @@ pub(crate) fn extract_mesh<'py>(
     scene: &PyScene,
     shape: &str,
     res: usize,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i32>>)> {
+) -> PyResult<MeshArrays<'py>> {
     if !(4..=1024).contains(&res) {
         return Err(PyValueError::new_err(format!(
             "res must be in 4..=1024, got {res}"
