@@ -84,6 +84,13 @@ impl Shape {
         self.sdf.eval(p - self.translate.get::<S>())
     }
 
+    /// The field of the faces at `p` ([`Sdf::eval_faces`]) in world coordinates, generic (lifted
+    /// parameters, translation included).
+    #[inline]
+    pub fn eval_faces<S: Scalar>(&self, p: Vec3<S>) -> S {
+        self.sdf.eval_faces(p - self.translate.get::<S>())
+    }
+
     /// `φ(p)` in `f32`.
     #[inline]
     pub fn eval_f32(&self, p: glam::Vec3) -> f32 {
@@ -96,10 +103,11 @@ impl Shape {
         self.sdf.gradient(p - self.translate.value())
     }
 
-    /// Outward unit normal at `p`.
+    /// Outward unit normal at a surface point `p`: its face's ([`Sdf::face_normal`]), whichever side
+    /// of the tracer's tolerance next to a sharp edge `p` lies on.
     #[inline]
     pub fn normal(&self, p: glam::Vec3) -> glam::Vec3 {
-        self.sdf.normal(p - self.translate.value())
+        self.sdf.face_normal(p - self.translate.value())
     }
 
     /// Total curvature `κ = ∇·n` at `p`.
