@@ -105,9 +105,24 @@ impl Shape {
 
     /// Outward unit normal at a surface point `p`: its face's ([`Sdf::face_normal`]), whichever side
     /// of the tracer's tolerance next to a sharp edge `p` lies on.
+    ///
+    /// Where the two fields agree (everywhere but the band outside a sharp edge, up to rounding) the
+    /// exact distance's normal is kept, bit for bit, so that images do not depend on which formula
+    /// computed an equal normal; only inside the band, where the exact distance's normal turns from
+    /// one face's to the other's, does the face's replace it.
     #[inline]
     pub fn normal(&self, p: glam::Vec3) -> glam::Vec3 {
-        self.sdf.face_normal(p - self.translate.value())
+        let local = p - self.translate.value();
+        let exact = self.sdf.normal(local);
+        if !self.creased {
+            return exact;
+        }
+        let face = self.sdf.face_normal(local);
+        if exact.dot(face) < 1.0 - 1e-6 {
+            face
+        } else {
+            exact
+        }
     }
 
     /// Total curvature `κ = ∇·n` at `p`.
