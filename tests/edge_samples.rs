@@ -8,7 +8,7 @@
 //! exact distance's level set rounds the edge with radius `φ`: its curvature `1/φ` in `∂πJ = κV` and
 //! its normal turning across the edge made such samples up to `10⁶` times a face's (a firefly of 40
 //! times the whole derivative in a 48×48 image at 1024 spp). A point of a face has its face's
-//! geometry on either side of the tolerance (docs/theory.md §2.3).
+//! geometry on either side of the tolerance (docs/theory.md §7.1, "surface points next to an edge").
 
 mod common;
 
