@@ -14,6 +14,10 @@
 //!   (a b)`, a sphere point to `c_S + r_S n` with `J = r_S² / r²`; normals do not move.
 //! - **Camera**: the lifted origin.
 //!
+//! Geometry (`V`, `κ`, `∇φ`, `H`) is read from the field of the faces ([`crate::sdf::Sdf::eval_faces`],
+//! theory §7.1): a point within the tracer's tolerance outside a sharp edge gets its face's, not the
+//! `1/φ` curvature of the exact distance's rounded level set there.
+//!
 //! Shapes whose curvature radius can be below a pixel may move by a field with a tangential part
 //! instead of the normal field ([`super::velocity`], theory §8), chosen per shape by
 //! [`crate::integrator::VelocityField`].
@@ -189,9 +193,11 @@ pub(super) fn surface_vertex<S: Scalar>(
     d: Vec3<S>,
     div: S,
 ) -> Option<Attached<S>> {
-    let r = shape.eval::<Grad<S>>(Grad::seed(p));
+    // The face's geometry, not the exterior distance's rounding around a sharp edge: `p` may lie
+    // outside one by the tracer's tolerance `φ`, where the latter's curvature is `1/φ`.
+    let r = shape.eval_faces::<Grad<S>>(Grad::seed(p));
     let grad = Vec3::new(r.g[0], r.g[1], r.g[2]);
-    let (_, g, h) = shape.sdf.hessian(p - shape.translate.value());
+    let (_, g, h) = shape.sdf.hessian_faces(p - shape.translate.value());
     let gl = g.length();
     if !(gl > 1e-12 && gl.is_finite()) {
         return None;

@@ -86,6 +86,13 @@ impl Shape {
         self.sdf.eval(p - self.translate.get::<S>())
     }
 
+    /// The field of the faces at `p` ([`Sdf::eval_faces`]) in world coordinates, generic (lifted
+    /// parameters, translation included).
+    #[inline]
+    pub fn eval_faces<S: Scalar>(&self, p: Vec3<S>) -> S {
+        self.sdf.eval_faces(p - self.translate.get::<S>())
+    }
+
     /// `φ(p)` in `f32`.
     #[inline]
     pub fn eval_f32(&self, p: glam::Vec3) -> f32 {
@@ -98,10 +105,26 @@ impl Shape {
         self.sdf.gradient(p - self.translate.value())
     }
 
-    /// Outward unit normal at `p`.
+    /// Outward unit normal at a surface point `p`: its face's ([`Sdf::face_normal`]), whichever side
+    /// of the tracer's tolerance next to a sharp edge `p` lies on.
+    ///
+    /// Where the two fields agree (everywhere but the band outside a sharp edge, up to rounding) the
+    /// exact distance's normal is kept, bit for bit, so that images do not depend on which formula
+    /// computed an equal normal; only inside the band, where the exact distance's normal turns from
+    /// one face's to the other's, does the face's replace it.
     #[inline]
     pub fn normal(&self, p: glam::Vec3) -> glam::Vec3 {
-        self.sdf.normal(p - self.translate.value())
+        let local = p - self.translate.value();
+        let exact = self.sdf.normal(local);
+        if !self.creased {
+            return exact;
+        }
+        let face = self.sdf.face_normal(local);
+        if exact.dot(face) < 1.0 - 1e-6 {
+            face
+        } else {
+            exact
+        }
     }
 
     /// Total curvature `κ = ∇·n` at `p`.

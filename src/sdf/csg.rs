@@ -113,56 +113,56 @@ fn smin_enclosure<E: Enclosure>(a: E, b: E, k: Interval) -> E {
 
 /// Union: the minimum of the children (`+∞`, the empty set, for no child).
 #[inline(always)]
-pub(super) fn union<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+pub(super) fn union<S: Scalar, const FACES: bool>(children: &[Sdf], p: Vec3<S>) -> S {
     let mut it = children.iter();
     let Some(first) = it.next() else {
         return S::constant(f32::INFINITY);
     };
-    let mut d = first.eval(p);
+    let mut d = first.eval_as::<S, FACES>(p);
     for c in it {
-        d = d.min(c.eval(p));
+        d = d.min(c.eval_as::<S, FACES>(p));
     }
     d
 }
 
 /// Intersection: the maximum of the children (`−∞`, the whole space, for no child).
 #[inline(always)]
-pub(super) fn intersection<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+pub(super) fn intersection<S: Scalar, const FACES: bool>(children: &[Sdf], p: Vec3<S>) -> S {
     let mut it = children.iter();
     let Some(first) = it.next() else {
         return S::constant(f32::NEG_INFINITY);
     };
-    let mut d = first.eval(p);
+    let mut d = first.eval_as::<S, FACES>(p);
     for c in it {
-        d = d.max(c.eval(p));
+        d = d.max(c.eval_as::<S, FACES>(p));
     }
     d
 }
 
 /// Difference: `max(φ_0, −φ_1, −φ_2, …)` (`+∞` for no child).
 #[inline(always)]
-pub(super) fn difference<S: Scalar>(children: &[Sdf], p: Vec3<S>) -> S {
+pub(super) fn difference<S: Scalar, const FACES: bool>(children: &[Sdf], p: Vec3<S>) -> S {
     let mut it = children.iter();
     let Some(first) = it.next() else {
         return S::constant(f32::INFINITY);
     };
-    let mut d = first.eval(p);
+    let mut d = first.eval_as::<S, FACES>(p);
     for c in it {
-        d = d.max(-c.eval(p));
+        d = d.max(-c.eval_as::<S, FACES>(p));
     }
     d
 }
 
 /// Smooth union: [`smin`] folded left over the children (`+∞` for no child).
 #[inline(always)]
-pub(super) fn smooth_union<S: Scalar>(children: &[Sdf], k: S, p: Vec3<S>) -> S {
+pub(super) fn smooth_union<S: Scalar, const FACES: bool>(children: &[Sdf], k: S, p: Vec3<S>) -> S {
     let mut it = children.iter();
     let Some(first) = it.next() else {
         return S::constant(f32::INFINITY);
     };
-    let mut d = first.eval(p);
+    let mut d = first.eval_as::<S, FACES>(p);
     for c in it {
-        d = smin(d, c.eval(p), k);
+        d = smin(d, c.eval_as::<S, FACES>(p), k);
     }
     d
 }

@@ -267,14 +267,37 @@ impl Sdf {
     /// `φ(p)`, generic over the scalar type.
     ///
     /// Allocation-free; with `f32` this is the sphere tracer's inner loop.
+    #[inline]
     pub fn eval<S: Scalar>(&self, p: Vec3<S>) -> S {
+        self.eval_as::<S, false>(p)
+    }
+
+    /// The field of the faces: `φ` with the exterior distance of every sharp primitive (a box or a
+    /// cylinder with `rounding = 0`) replaced by the largest of its faces' own fields (`max_i q_i` for
+    /// a box, `max(ρ − R, |h| − H)` for a cylinder), everything else as [`Sdf::eval`].
+    ///
+    /// The same surface and the same values inside and next to each face, but level sets that stay
+    /// flat (a cylinder's side: cylindrical) up to the edges instead of rounding around them. A point
+    /// the tracer returns lies within its tolerance of the surface, on either side: outside a sharp
+    /// edge by a tiny `φ`, the exact distance's level set is a cylinder of radius `φ` about the edge,
+    /// of curvature `1/φ` and with a normal turning over a distance `φ`, while the point belongs to a
+    /// face, flat. The geometry that moves a surface point with the parameters (the normal velocity,
+    /// the curvature in `∂πJ = κV`, the moving normal; docs/theory.md §2.1–§2.3) is read from this
+    /// field, so that it is the face's whichever side of the tolerance the point lies on.
+    pub fn eval_faces<S: Scalar>(&self, p: Vec3<S>) -> S {
+        self.eval_as::<S, true>(p)
+    }
+
+    /// [`Sdf::eval`] (`FACES = false`) or [`Sdf::eval_faces`]; chosen at compile time, so the
+    /// tracer's `f32` evaluation is unchanged.
+    pub(super) fn eval_as<S: Scalar, const FACES: bool>(&self, p: Vec3<S>) -> S {
         match self {
             Sdf::Sphere { center, radius } => primitives::sphere(p, center, radius),
             Sdf::Box {
                 center,
                 half_size,
                 rounding,
-            } => primitives::cuboid(p, center, half_size, rounding),
+            } => primitives::cuboid::<S, FACES>(p, center, half_size, rounding),
             Sdf::Torus {
                 center,
                 axis,
@@ -287,13 +310,15 @@ impl Sdf {
                 radius,
                 half_height,
                 rounding,
-            } => primitives::cylinder(p, center, *axis, radius, half_height, rounding),
+            } => primitives::cylinder::<S, FACES>(p, center, *axis, radius, half_height, rounding),
             Sdf::Primitive(primitive) => primitive.eval(p),
             Sdf::Plane { normal, offset } => primitives::plane(p, *normal, offset),
-            Sdf::Union(children) => csg::union(children, p),
-            Sdf::Intersection(children) => csg::intersection(children, p),
-            Sdf::Difference(children) => csg::difference(children, p),
-            Sdf::SmoothUnion { children, k } => csg::smooth_union(children, k.get::<S>(), p),
+            Sdf::Union(children) => csg::union::<S, FACES>(children, p),
+            Sdf::Intersection(children) => csg::intersection::<S, FACES>(children, p),
+            Sdf::Difference(children) => csg::difference::<S, FACES>(children, p),
+            Sdf::SmoothUnion { children, k } => {
+                csg::smooth_union::<S, FACES>(children, k.get::<S>(), p)
+            }
             Sdf::Transform {
                 translate,
                 axis,
@@ -301,7 +326,7 @@ impl Sdf {
                 scale,
                 child,
                 trig,
-            } => transform::eval(p, translate, *axis, angle, *trig, scale, child),
+            } => transform::eval::<S, FACES>(p, translate, *axis, angle, *trig, scale, child),
             Sdf::Grid {
                 data,
                 bbox_min,
@@ -309,7 +334,7 @@ impl Sdf {
                 level,
                 selection,
             } => grid::eval(data, *bbox_min, *bbox_max, selection, p) - level.get::<S>(),
-            Sdf::Named { child, .. } => child.eval(p),
+            Sdf::Named { child, .. } => child.eval_as::<S, FACES>(p),
         }
     }
 
@@ -332,10 +357,26 @@ impl Sdf {
                 center,
                 half_size,
                 rounding,
-            } => box_gradient(p - center.value(), half_size.value(), rounding.value),
+            } => box_gradient(p - center.value(), half_size.value(), rounding.value, false),
             // The child's fast path, if it has one.
             Sdf::Named { child, .. } => child.gradient(p),
             _ => self.ad_gradient(p),
+        }
+    }
+
+    /// The gradient of the field of the faces ([`Sdf::eval_faces`]): [`Sdf::gradient`] except next
+    /// to a sharp primitive's edges (outside it, within the distance to them), where it is the nearest
+    /// face's.
+    pub fn gradient_faces(&self, p: glam::Vec3) -> glam::Vec3 {
+        match self {
+            Sdf::Sphere { .. } => self.gradient(p),
+            Sdf::Box {
+                center,
+                half_size,
+                rounding,
+            } => box_gradient(p - center.value(), half_size.value(), rounding.value, true),
+            Sdf::Named { child, .. } => child.gradient_faces(p),
+            _ => gradient_by_ad(p, |q| Some(self.eval_faces(q))),
         }
     }
 
@@ -349,9 +390,27 @@ impl Sdf {
         self.gradient(p).try_normalize().unwrap_or(glam::Vec3::Z)
     }
 
+    /// The normal of the field of the faces ([`Sdf::gradient_faces`]): a surface point's normal, that
+    /// of its face even where the point lies outside a sharp edge by a tracer's tolerance (where
+    /// [`Sdf::normal`] turns from one face's to the other's); `+z` where the gradient vanishes.
+    pub fn face_normal(&self, p: glam::Vec3) -> glam::Vec3 {
+        self.gradient_faces(p)
+            .try_normalize()
+            .unwrap_or(glam::Vec3::Z)
+    }
+
     /// Value, gradient and Hessian at `p` by second-order forward AD ([`Dual2Vec3`]).
     pub fn hessian(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
-        let v = self.eval(Vec3::new(
+        self.hessian_as::<false>(p)
+    }
+
+    /// [`Sdf::hessian`] of the field of the faces ([`Sdf::eval_faces`]).
+    pub fn hessian_faces(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
+        self.hessian_as::<true>(p)
+    }
+
+    fn hessian_as<const FACES: bool>(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
+        let v = self.eval_as::<_, FACES>(Vec3::new(
             Dual2Vec3::from_re(p.x).derivative(0),
             Dual2Vec3::from_re(p.y).derivative(1),
             Dual2Vec3::from_re(p.z).derivative(2),
@@ -561,7 +620,8 @@ fn curvature_from(g: glam::Vec3, h: glam::Mat3) -> f32 {
 /// Analytic gradient of the rounded box at `d = p − center`, branch for branch as [`Sdf::eval`] (and so
 /// as AD): outside the shrunk box, the direction from its closest point; inside, the axis of the largest
 /// `q_i` (ties to the lower axis, as `max_element`), signed by `d` (the positive branch at 0, as `abs`).
-fn box_gradient(d: glam::Vec3, half_size: glam::Vec3, rounding: f32) -> glam::Vec3 {
+/// With `faces` and no rounding, as [`Sdf::eval_faces`]: the axis of the largest `q_i` everywhere.
+fn box_gradient(d: glam::Vec3, half_size: glam::Vec3, rounding: f32, faces: bool) -> glam::Vec3 {
     let sign = glam::Vec3::select(d.cmplt(glam::Vec3::ZERO), -glam::Vec3::ONE, glam::Vec3::ONE);
     let q = d.abs() - half_size + glam::Vec3::splat(rounding);
     let (mut axis, mut m) = (0, q.x);
@@ -571,7 +631,7 @@ fn box_gradient(d: glam::Vec3, half_size: glam::Vec3, rounding: f32) -> glam::Ve
     if q.z > m {
         (axis, m) = (2, q.z);
     }
-    if m > 0.0 {
+    if m > 0.0 && !(faces && rounding == 0.0) {
         q.max(glam::Vec3::ZERO).normalize_or_zero() * sign
     } else {
         let mut g = glam::Vec3::ZERO;

@@ -15,8 +15,10 @@ pub(super) fn sphere<S: Scalar>(p: Vec3<S>, center: &Param3, radius: &Param) -> 
 
 /// Rounded box with outer half extents `b` and edge radius `r`: the box of half extents `b − r`
 /// dilated by `r`. `q = |p − c| − b + r`; `φ = |max(q, 0)| + min(max_i q_i, 0) − r`.
+///
+/// With `FACES` and `r = 0` (a sharp box), the field of its faces `max_i q_i` ([`super::Sdf::eval_faces`]).
 #[inline(always)]
-pub(super) fn cuboid<S: Scalar>(
+pub(super) fn cuboid<S: Scalar, const FACES: bool>(
     p: Vec3<S>,
     center: &Param3,
     half_size: &Param3,
@@ -24,6 +26,9 @@ pub(super) fn cuboid<S: Scalar>(
 ) -> S {
     let r = rounding.get::<S>();
     let q = (p - center.get::<S>()).abs() - half_size.get::<S>() + Vec3::splat(r);
+    if FACES && rounding.value == 0.0 {
+        return q.max_element() - r;
+    }
     q.max_f32(0.0).length() + q.max_element().min(S::zero()) - r
 }
 
@@ -52,8 +57,11 @@ pub(super) fn torus<S: Scalar>(
 
 /// Capped cylinder, rims rounded by `rb` with the outer radius and height kept (shrink by `rb`, dilate by
 /// `rb`): `d = (ρ − R + rb, |h| − H + rb)`, `φ = min(max(d), 0) + |max(d, 0)| − rb`.
+///
+/// With `FACES` and `rb = 0` (sharp rims), the field of its side and caps `max(d)`
+/// ([`super::Sdf::eval_faces`]).
 #[inline(always)]
-pub(super) fn cylinder<S: Scalar>(
+pub(super) fn cylinder<S: Scalar, const FACES: bool>(
     p: Vec3<S>,
     center: &Param3,
     axis: glam::Vec3,
@@ -65,6 +73,9 @@ pub(super) fn cylinder<S: Scalar>(
     let rb = rounding.get::<S>();
     let dx = rho - radius.get::<S>() + rb;
     let dy = h.abs() - half_height.get::<S>() + rb;
+    if FACES && rounding.value == 0.0 {
+        return dx.max(dy) - rb;
+    }
     let ox = dx.max(S::zero());
     let oy = dy.max(S::zero());
     dx.max(dy).min(S::zero()) + (ox * ox + oy * oy).safe_sqrt() - rb

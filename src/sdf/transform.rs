@@ -422,7 +422,7 @@ fn map_box(
 
 /// `φ(x) = s φ_child(R⁻¹(x − t)/s)`.
 #[inline(always)]
-pub(super) fn eval<S: Scalar>(
+pub(super) fn eval<S: Scalar, const FACES: bool>(
     p: Vec3<S>,
     translate: &Param3,
     axis: glam::Vec3,
@@ -432,7 +432,7 @@ pub(super) fn eval<S: Scalar>(
     child: &Sdf,
 ) -> S {
     let frame = Similarity::<S>::for_eval(translate, axis, angle, trig, scale);
-    frame.from_child_length(child.eval(frame.to_child_point(p)))
+    frame.from_child_length(child.eval_as::<S, FACES>(frame.to_child_point(p)))
 }
 
 /// The declaration of the transform node's fields ([`crate::declare`]).

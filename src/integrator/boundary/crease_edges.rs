@@ -53,8 +53,11 @@
 //!   w_j(u_C) · [ L₋ (v − u̇₋) − L₊ (v − u̇₊) ] · |P'T| · Λ                                           (3)
 //! ```
 //!
-//! with `L∓` one camera path each (the integrator's own estimator) through `u_C ∓ ε n_img`, `ε` = 1/50
-//! pixel, averaged over the `N` samples of its own random stream ([`CREASE_STREAM`]).
+//! with `L∓` one camera path each (the integrator's own estimator), averaged over the `N` samples of its
+//! own random stream ([`CREASE_STREAM`]): on a side whose face the eye sees, through that face's point
+//! a few tracer tolerances across the edge from `x_C`; on a side left to what lies beyond (the face
+//! turned away), through `u_C ∓ ε n_img`, `ε` = 1/50 pixel. A face seen nearly edge-on projects to a
+//! sliver narrower than `ε`, which a ray at a fixed image offset would cross (`seen_faces`).
 //!
 //! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]), the tear at
 //! vertices after the first [`super::crease_tears`]'s. Not included: the creases between unbounded
@@ -408,9 +411,14 @@ fn sample<S: Directions>(
             shape: m,
         }
     });
+    // The faces the eye sees, each with the image side it lies on and a point of it next to the edge.
+    let seen = seen_faces(shape, edge, x, pt.tangent, eye, (du, dv), n_img, delta);
     let mut side = |sign: f32| -> Option<(glam::Vec3, S)> {
         let off = sign * off_pixels;
-        let ray = frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y));
+        let ray = match seen.iter().flatten().find(|(s, _)| *s == sign) {
+            Some((_, y)) => Ray::new(eye, (*y - eye).try_normalize()?),
+            None => frame.generate_ray(glam::Vec2::new(px + off * n_img.x, py + off * n_img.y)),
+        };
         let depth = scene.integrator.max_scatter();
         let first = (depth > 0).then(|| {
             let found = scene.intersect_resolving(&ray, f32::INFINITY, frame.spread(ray.d));
@@ -439,6 +447,46 @@ fn sample<S: Directions>(
     if finite_splat(&value, cover) {
         splat_on_film(scene, (px, py), value, cover, splats);
     }
+}
+
+/// The faces of `edge` at its point `x` (unit tangent `tangent`) that face the eye at `eye`, each as
+/// `(sign, y)`: the side of the edge's image it lies on (`±1` along `n_img`, through the projection's
+/// Jacobian rows `jac`) and its point `y` at `delta` from `x` across the edge.
+///
+/// A side whose face the eye sees is seen at that face's point next to the edge, not along a ray
+/// passing the edge's image at a fixed offset: a face seen nearly edge-on projects to a sliver
+/// narrower than any such offset, and that ray would cross it and see what lies beyond (another face,
+/// the background) on both edges bounding the sliver, counting the jump between those twice. A face
+/// turned away leaves its side to the background, seen past the edge.
+#[allow(clippy::too_many_arguments)]
+fn seen_faces(
+    shape: &Shape,
+    edge: &CreaseEdge,
+    x: glam::Vec3,
+    tangent: glam::Vec3,
+    eye: glam::Vec3,
+    (du, dv): (glam::Vec3, glam::Vec3),
+    n_img: glam::Vec2,
+    delta: f32,
+) -> [Option<(f32, glam::Vec3)>; 2] {
+    let grads = [0, 1].map(|f| face_gradient(shape, edge, f, x));
+    [0, 1].map(|f| {
+        // The surface's outward normal on face f (−∇F inside a subtracted child).
+        let outward = if edge.inverted { -grads[f] } else { grads[f] };
+        if outward.dot(eye - x) <= 0.0 {
+            return None;
+        }
+        // Across the edge within face f: orthogonal to the edge and to ∇F_f, towards the other face's
+        // inside (`F_other < 0` on face f).
+        let across = tangent.cross(grads[f]).try_normalize()?;
+        let across = if across.dot(grads[1 - f]) > 0.0 {
+            -across
+        } else {
+            across
+        };
+        let image = n_img.dot(glam::Vec2::new(du.dot(across), dv.dot(across)));
+        (image != 0.0 && image.is_finite()).then(|| (image.signum(), x + across * delta))
+    })
 }
 
 /// The solid next to a convex crease point `apex`, to first order: the wedge where both faces' tangent
