@@ -124,8 +124,8 @@ fn check(label: &str, sdf: &str, names: &[&str], ratio: f64) {
         r#"{"type": "path", "max_depth": 3}"#,
     ] {
         for (i, name) in names.iter().enumerate() {
-            let mut scene = scene(sdf, integrator);
-            scene.select_parameters(&[name.to_string()]).unwrap();
+            let plain = scene(sdf, integrator);
+            let scene = plain.select(&[name]).unwrap().apply(&plain).unwrap();
             let attach = SceneAttach::new(&scene, VelocityField::Auto);
             let largest = |rays: Vec<Ray>| {
                 (rays.into_iter().enumerate())
