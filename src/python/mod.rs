@@ -9,6 +9,7 @@
 //! bug) becomes `RuntimeError` rather than crossing into Python.
 
 mod arrays;
+mod cli;
 mod grad;
 mod optimize;
 mod render;
@@ -73,7 +74,8 @@ pub(crate) fn run_detached<T: Send>(
     })
 }
 
-/// The extension module: the `Scene` class, `render`, `diff`, `grad`, `optimize` and `read_exr`.
+/// The extension module: the `Scene` class, `render`, `diff`, `grad`, `optimize`, `read_exr`, and
+/// `cli` (the command-line tool).
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
@@ -84,6 +86,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(grad::grad, m)?)?;
     m.add_function(wrap_pyfunction!(optimize::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(cli::cli, m)?)?;
     m.add("DEFAULT_SEED", 0u64)?;
     Ok(())
 }

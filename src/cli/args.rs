@@ -1,8 +1,8 @@
 //! The command line: subcommands, their arguments and help texts, and the parsers of argument values.
 
+use crate::integrator::VelocityField;
+use crate::integrator::{Loss, Normalization};
 use clap::{ArgGroup, Args, Parser, Subcommand};
-use implicit_psdr::integrator::VelocityField;
-use implicit_psdr::integrator::{Loss, Normalization};
 use std::path::PathBuf;
 
 /// Physically based rendering of implicit surfaces.
@@ -210,7 +210,7 @@ pub(crate) struct ReportArgs {
     pub(crate) reference: Option<PathBuf>,
     /// Seconds of estimator runs in all, shared evenly between the (parameter, estimator) series and
     /// the image; the references come on top.
-    #[arg(long, value_name = "SECONDS", default_value_t = implicit_psdr::report::DEFAULT_BUDGET,
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::report::DEFAULT_BUDGET,
           allow_negative_numbers = true, value_parser = positive_f64)]
     pub(crate) budget: f64,
     /// Comma-separated estimators: complete, interior, complete-boundary-x4, complete-boundary-div4,

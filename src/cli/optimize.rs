@@ -1,13 +1,13 @@
 //! The `optimize` command: inverse rendering as an `OPT.json` describes it (see
 //! docs/inverse-rendering.md), with its outputs in one folder. The run is the library's
-//! (`implicit_psdr::optimize::run`); this shows progress and prints.
+//! ([`crate::optimize::run`]); this shows progress and prints.
 
-use crate::args::OptimizeArgs;
-use crate::progress_bar;
+use crate::cli::args::OptimizeArgs;
+use crate::cli::progress_bar;
+use crate::integrator::Progress;
+use crate::optimize::config::OptimizeConfig;
+use crate::optimize::{self, Observer, Status};
 use anyhow::Result;
-use implicit_psdr::integrator::Progress;
-use implicit_psdr::optimize::config::OptimizeConfig;
-use implicit_psdr::optimize::{self, Observer, Status};
 use std::io::IsTerminal;
 
 pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
@@ -16,7 +16,7 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
     let mut bars = Bars(None);
     let outcome = optimize::run(&cfg, Some(out), &mut bars).map_err(|e| match e {
         // The library names the folder; the command names its flag too.
-        implicit_psdr::Error::File { ref path, .. } if *path == out.display().to_string() => {
+        crate::Error::File { ref path, .. } if *path == out.display().to_string() => {
             anyhow::anyhow!("--out {e}")
         }
         e => e.into(),

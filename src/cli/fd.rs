@@ -1,10 +1,10 @@
 //! The `fd` command: central finite differences of one parameter with common random numbers, as
 //! EXR channels and a PNG, like `diff`'s.
 
-use crate::args::FdArgs;
-use crate::{in_file, output_paths, prepare, warn, write_derivatives};
+use crate::cli::args::FdArgs;
+use crate::cli::{in_file, output_paths, prepare, warn, write_derivatives};
+use crate::integrator::fd;
 use anyhow::Result;
-use implicit_psdr::integrator::fd;
 
 pub(crate) fn finite_difference(args: &FdArgs) -> Result<()> {
     let paths = output_paths(&args.outputs, "fd")?;

@@ -1,17 +1,17 @@
 //! The `report` command: speed against error of the estimators for the scene's parameters, as a CSV,
 //! a Markdown table and a plot (PNG and SVG) in one folder. The protocol is the library's
-//! (`implicit_psdr::report`); this prints, shows progress and writes.
+//! ([`crate::report`]); this prints, shows progress and writes.
 //!
 //! Everything is checked (scene, parameters, estimators, budget, reference) before anything long is
 //! rendered and before the folder is touched; the four files are written to temporary names and
 //! renamed only when all are written.
 
-use crate::args::ReportArgs;
-use crate::load_scene;
+use crate::cli::args::ReportArgs;
+use crate::cli::load_scene;
+use crate::integrator::fd;
+use crate::io::{Writer, write_all_or_nothing};
+use crate::report::{self, Estimator, Status, plot, summary};
 use anyhow::{Context, Result, bail};
-use implicit_psdr::integrator::fd;
-use implicit_psdr::io::{Writer, write_all_or_nothing};
-use implicit_psdr::report::{self, Estimator, Status, plot, summary};
 use std::io::IsTerminal;
 
 pub(crate) fn report(args: &ReportArgs) -> Result<()> {
@@ -24,7 +24,7 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     for p in &args.params {
         // The error names `--param` and the parameter itself, as `fd`'s does.
         fd::parameter_value(&scene, p)
-            .map_err(crate::flagged)
+            .map_err(crate::cli::flagged)
             .with_context(|| args.scene.display().to_string())?;
     }
     let out = &args.out;
@@ -45,7 +45,7 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
         args.budget,
         given.is_none(),
     )
-    .map_err(crate::flagged)?;
+    .map_err(crate::cli::flagged)?;
     for s in &plan.skipped {
         let name = summary::section_name(s.parameter.as_deref());
         outln!("skipped {} for {name}: {}", s.estimator.name(), s.reason)?;
