@@ -26,6 +26,7 @@ mod fd;
 mod grad;
 mod optimize;
 mod params;
+mod records;
 mod render;
 mod report;
 
