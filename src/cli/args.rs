@@ -2,6 +2,7 @@
 
 use crate::integrator::VelocityField;
 use crate::integrator::{Loss, Normalization};
+use crate::scene::settings;
 use clap::{ArgGroup, Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -24,9 +25,10 @@ pub(crate) struct SceneArgs {
     /// Seed of the deterministic sampler.
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,
-    /// Override a parameter listed by `params` (repeatable), e.g. `--set ball.radius=0.8`.
+    /// Override a parameter listed by `params` (repeatable), e.g. `--set ball.radius=0.8`, or a
+    /// setting: camera.width, camera.height, spp, integrator (direct or path), integrator.max_depth.
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = assignment)]
-    pub(crate) set: Vec<(String, f32)>,
+    pub(crate) set: Vec<(String, String)>,
 }
 
 /// Output files of the rendering commands; the defaults are `<command>.exr` and `<command>.png`.
@@ -236,11 +238,16 @@ pub(crate) struct FdArgs {
     pub(crate) outputs: OutputArgs,
 }
 
-/// `NAME=VALUE` with a finite value.
-pub(crate) fn assignment(text: &str) -> Result<(String, f32), String> {
+/// `NAME=VALUE`: a parameter with a finite value, or a setting with a value its field's rules judge
+/// later (see [`crate::scene::settings`]).
+pub(crate) fn assignment(text: &str) -> Result<(String, String), String> {
     let (name, value) = text.split_once('=').ok_or("expected NAME=VALUE")?;
-    match value.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok((name.trim().to_string(), v)),
+    let (name, value) = (name.trim().to_string(), value.trim().to_string());
+    if settings::is_setting(&name) {
+        return Ok((name, value));
+    }
+    match value.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok((name, value)),
         _ => Err(format!("{value:?} is not a finite number")),
     }
 }

@@ -32,6 +32,7 @@ mod report;
 
 use crate::film::{Image, colormap};
 use crate::integrator::{BoundaryBudget, DiffOptions, Progress, RenderOptions, RenderStats};
+use crate::scene::settings;
 use crate::{compare, io, scene};
 use anyhow::{Context, Result};
 use args::{Cli, Command, EstimatorArgs, OutputArgs, SceneArgs};
@@ -174,11 +175,24 @@ pub(crate) fn load_scene(path: &Path) -> Result<scene::Scene> {
     scene::load(path).map_err(in_file(path))
 }
 
-/// Loads the scene with the `--set` overrides applied, and the options to render it with.
+/// Loads the scene with the `--set` overrides applied (settings before parameters), and the options
+/// to render it with.
 fn prepare(args: &SceneArgs) -> Result<(scene::Scene, RenderOptions)> {
-    let mut scene = load_scene(&args.scene)?;
-    for (name, value) in &args.set {
-        scene = (scene.with_parameter(name, *value))
+    let (settings, parameters): (Vec<_>, Vec<_>) =
+        (args.set.iter().cloned()).partition(|(name, _)| settings::is_setting(name));
+    let mut scene = match settings.as_slice() {
+        [] => load_scene(&args.scene)?,
+        _ => settings::load_with_settings(&args.scene, &settings)
+            .map_err(in_file(&args.scene))
+            .with_context(|| {
+                let set: Vec<String> = (settings.iter()).map(|(n, v)| format!("{n}={v}")).collect();
+                format!("--set {}", set.join(" --set "))
+            })?,
+    };
+    for (name, value) in &parameters {
+        // Checked to be a finite number when the arguments were parsed.
+        let number: f32 = value.parse()?;
+        scene = (scene.with_parameter(name, number))
             .map_err(in_file(&args.scene))
             .with_context(|| format!("--set {name}={value}"))?;
     }

@@ -7,6 +7,7 @@ pub(crate) mod json;
 mod params;
 pub mod patch;
 mod selection;
+pub mod settings;
 
 pub use grids::{GridBlock, GridDirection, ParameterEntry};
 pub use integrator_kind::IntegratorKind;
