@@ -34,7 +34,8 @@ pub(crate) struct SceneArgs {
 /// Output files of the rendering commands; the defaults are `<command>.exr` and `<command>.png`.
 #[derive(Args, Debug)]
 pub(crate) struct OutputArgs {
-    /// Output EXR file (`.exr`) [default: <command>.exr, e.g. out.exr for render].
+    /// Output EXR file (`.exr`; a missing folder is created) [default: <command>.exr, e.g. out.exr for
+    /// render].
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// Output PNG file (`.png`) [default: <command>.png, e.g. out.png for render].
@@ -70,8 +71,9 @@ pub(crate) enum Command {
     /// scene parameters and grid values, to a JSON file (the loss and one number per parameter) and one
     /// float32 .npy per grid (the gradient of each value, shape [nz, ny, nx]).
     Grad(GradArgs),
-    /// Central finite differences of the image with respect to one parameter, with common random numbers
-    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
+    /// Central finite differences of the image with respect to parameters, with common random numbers
+    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B`, and `d.P.R|G|B` per parameter
+    /// P) and a PNG.
     Fd(FdArgs),
     /// Inverse rendering: optimise scene parameters and grid values so that renders from several
     /// views match target images, as OPT.json describes (see docs/inverse-rendering.md). Writes into
@@ -228,10 +230,11 @@ pub(crate) struct ReportArgs {
 pub(crate) struct FdArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
-    /// The parameter (see `params`).
-    #[arg(long = "param", value_name = "P")]
-    pub(crate) param: String,
-    /// Step, a finite number > 0 (default: 0.01 · max(|P|, 1)).
+    /// A parameter (repeat for several, each a pair of renders with the image's samples; see
+    /// `params`).
+    #[arg(long = "param", value_name = "P", required = true)]
+    pub(crate) params: Vec<String>,
+    /// Step, a finite number > 0, for every parameter (default: 0.01 · max(|P|, 1) for each).
     #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
     pub(crate) h: Option<f32>,
     #[command(flatten)]

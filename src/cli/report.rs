@@ -32,6 +32,7 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     if out.exists() && !out.is_dir() {
         bail!("--out {}: is not a folder", out.display());
     }
+    crate::io::check_output_folder(out, "--out")?;
     let given = match &args.reference {
         Some(path) => {
             let size = (scene.camera.width, scene.camera.height);
