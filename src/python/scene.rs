@@ -100,6 +100,41 @@ impl PyScene {
         Ok(grid_to_py(py, &data))
     }
 
+    /// The scene as a dict of the scene file's structure (what ``json.load`` of its file gives), with
+    /// every parameter's current value written where the file keeps it. Grid nodes keep their
+    /// ``file``, which holds the values the scene was loaded with: ``save`` writes changed grids too.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let doc = patch::patched_scene_json(&self.doc, &self.scene, &[]).map_err(scene_error)?;
+        let json = py.import("json")?;
+        json.call_method1("loads", (doc.to_string(),))
+    }
+
+    /// Writes the scene to the scene file ``path`` (``.json``; a missing folder is created), with
+    /// every parameter's current value and every grid's current values: grid node ``NODE`` goes to
+    /// ``<stem>.NODE.npy`` beside it (``<stem>`` the file's name without ``.json``), and the file
+    /// names it so. ``Scene.load(path)`` gives this scene back; ``implicit-psdr render path``
+    /// renders it. Raises ``SceneError`` for a path that cannot be written (nothing is written then).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        crate::io::check_output_path(&path, "path", "json").map_err(scene_error)?;
+        let stem = (path.file_stem()).map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let blocks = self.scene.grid_blocks();
+        let files: Vec<(String, String)> = (blocks.iter())
+            .map(|b| (b.node.clone(), format!("{stem}.{}.npy", b.node)))
+            .collect();
+        let doc = patch::patched_scene_json(&self.doc, &self.scene, &files).map_err(scene_error)?;
+        let folder = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mut writes: Vec<(PathBuf, crate::io::Writer)> = Vec::new();
+        for (block, (_, file)) in blocks.iter().zip(&files) {
+            let data = self.scene.grid_values(&block.node).map_err(scene_error)?;
+            writes.push((
+                folder.join(file),
+                Box::new(move |tmp| sdf::write_npy(tmp, &data).map_err(crate::io::file_message)),
+            ));
+        }
+        writes.push((path, crate::io::bytes_writer(patch::scene_text(&doc))));
+        crate::io::write_all_or_nothing(writes).map_err(scene_error)
+    }
+
     /// An independent copy (changing one does not change the other).
     fn copy(&self) -> Self {
         self.clone()
