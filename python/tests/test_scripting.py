@@ -124,3 +124,11 @@ def test_grids_must_be_floats_as_in_a_file(small):
     assert np.array_equal(scene.grid(GRID), grid)
     scene.set_grid(GRID, grid.astype(np.float64))
     assert np.array_equal(scene.grid(GRID), grid)
+
+
+def test_a_light_that_lights_nothing_warns(small):
+    _, doc = small("sphere_floor")
+    doc["emitters"] = [dict(doc["emitters"][0], normal=[0, 1, 0])]
+    with pytest.warns(RuntimeWarning, match='emitter "light" lights nothing the camera sees'):
+        scene = ip.Scene.from_dict(doc)
+    assert ip.render(scene).max() == 0

@@ -196,6 +196,9 @@ fn prepare(args: &SceneArgs) -> Result<(scene::Scene, RenderOptions)> {
             .map_err(in_file(&args.scene))
             .with_context(|| format!("--set {name}={value}"))?;
     }
+    for line in scene.reach_warnings() {
+        eprintln!("warning: {line}");
+    }
     let options = RenderOptions {
         spp: args.spp.unwrap_or(scene.spp),
         seed: args.seed,

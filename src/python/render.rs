@@ -57,7 +57,12 @@ pub(crate) fn diff_options(
 /// Issues what went wrong during a render (rays out of steps, non-finite samples) as Python
 /// warnings, the lines the command-line tool prints.
 pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
-    for line in stats.warnings() {
+    warn_lines(py, stats.warnings())
+}
+
+/// Issues each line as a Python `RuntimeWarning`.
+pub(crate) fn warn_lines(py: Python<'_>, lines: Vec<String>) -> PyResult<()> {
+    for line in lines {
         let message = std::ffi::CString::new(line.replace('\0', " "))
             .expect("no interior NUL after replacing them");
         PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;

@@ -2,6 +2,7 @@
 //! (so that Ray can ship it to other processes).
 
 use super::arrays::{grid_from_py, grid_to_py};
+use super::render::warn_lines;
 use super::scene_error;
 use crate::scene::{self, ParameterEntry, Scene, patch};
 use crate::sdf::{self, GridData};
@@ -31,7 +32,8 @@ pub(crate) struct PyScene {
 #[pymethods]
 impl PyScene {
     /// Loads a scene file (JSON); relative grid ``file`` names resolve against its folder. Raises
-    /// ``SceneError`` naming the file and the field.
+    /// ``SceneError`` naming the file and the field. Warns (``RuntimeWarning``) about a shape outside
+    /// the camera's view and a rectangle light that lights nothing the camera sees, as the tool does.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let loaded = py.detach(|| {
@@ -41,7 +43,9 @@ impl PyScene {
             let doc = serde_json::from_str(&text).map_err(|e| crate::Error::file(&path, e))?;
             Ok::<_, crate::Error>(Self { scene, doc })
         });
-        loaded.map_err(scene_error)
+        let loaded = loaded.map_err(scene_error)?;
+        warn_lines(py, loaded.scene.reach_warnings())?;
+        Ok(loaded)
     }
 
     /// A scene from a dict of the scene file's structure (as ``json.load`` returns it). Relative
@@ -52,7 +56,9 @@ impl PyScene {
     fn from_dict(scene: &Bound<'_, PyAny>, base_dir: Option<PathBuf>) -> PyResult<Self> {
         let doc = to_json(scene, "scene").map_err(scene_error)?;
         let base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
-        Self::parse(doc, &base_dir).map_err(scene_error)
+        let parsed = Self::parse(doc, &base_dir).map_err(scene_error)?;
+        warn_lines(scene.py(), parsed.scene.reach_warnings())?;
+        Ok(parsed)
     }
 
     /// Every parameter, in the order of the ``params`` command: ``name -> value`` (a float), and

@@ -6,6 +6,7 @@ mod integrator_kind;
 pub(crate) mod json;
 mod params;
 pub mod patch;
+mod reach;
 mod selection;
 pub mod settings;
 
