@@ -30,7 +30,8 @@
 //!
 //! The entry points that run all four: [`integrator::render`], [`integrator::render_derivatives`] and
 //! [`integrator::loss_gradient`]; [`optimize`] and [`report`] are built on them. Files (EXR, PNG,
-//! `.npy`, strict JSON) are read and written in [`io`].
+//! `.npy`, strict JSON) are read and written in [`io`]. The command-line tool is [`cli`] (the binary and
+//! the Python package's `implicit-psdr` command both run it).
 //!
 //! # Adding a kind of node
 //!
@@ -48,6 +49,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod cli;
 pub mod compare;
 pub mod declare;
 pub mod emitter;

@@ -178,11 +178,11 @@ fn unwritable_output_fails_before_rendering() {
     std::fs::write(dir.join("scene.json"), scene(|_| {})).unwrap();
     let out = run(
         &dir,
-        &["render", "scene.json", "--out", "no/such/folder/x.exr"],
+        &["render", "scene.json", "--out", "scene.json/folder/x.exr"],
     );
     assert_failure(
         &out,
-        "--out no/such/folder/x.exr: folder no/such/folder does not exist",
+        "--out scene.json/folder/x.exr: scene.json is a file, not a folder",
     );
     assert_eq!(outputs(&dir, &["scene.json"]), Vec::<String>::new());
     std::fs::remove_dir_all(&dir).unwrap();

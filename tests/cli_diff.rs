@@ -398,9 +398,9 @@ fn bad_arguments_exit_2_without_output() {
                 "--param",
                 "ball.radius",
                 "--out",
-                "no/x.exr",
+                "scene.json/x.exr",
             ],
-            "--out no/x.exr: folder no does not exist",
+            "--out scene.json/x.exr: scene.json is a file, not a folder",
         ),
         (
             &[

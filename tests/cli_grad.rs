@@ -550,8 +550,8 @@ fn bad_inputs_exit_2_without_output() {
             "--out g.txt: must end in .json",
         ),
         (
-            &["--param", "ball.radius", "--out", "no/g.json"],
-            "--out no/g.json: folder no does not exist",
+            &["--param", "ball.radius", "--out", "scene.json/g.json"],
+            "--out scene.json/g.json: scene.json is a file, not a folder",
         ),
         (
             &["--param", "ball.radius", "--out", "./scene.json"],

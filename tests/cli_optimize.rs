@@ -107,12 +107,44 @@ fn listing(dir: &Path) -> Vec<String> {
 #[test]
 fn tiny_run_writes_every_output_and_moves_the_parameter() {
     let dir = setup("tiny", &tiny_opt());
-    let stdout = assert_success(&run(&dir, &["optimize", "opt.json", "--out", "out"]));
-    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    let result = run(&dir, &["optimize", "opt.json", "--out", "out"]);
+    let stdout = assert_success(&result);
+    let summary: Vec<&str> = stdout.lines().collect();
+    assert_eq!(summary.len(), 3, "{stdout}");
     assert!(
-        stdout.contains("5 iterations") && stdout.contains(" -> ") && stdout.contains("out"),
+        summary[0].contains("5 iterations")
+            && summary[0].contains(" -> ")
+            && summary[0].contains("out"),
         "{stdout}"
     );
+    // The optimised parameter's start and end (checked against result.json below), and the file.
+    let (from, to) = (summary[1].strip_prefix("  ball.radius: ").unwrap())
+        .split_once(" -> ")
+        .unwrap();
+    assert_eq!(from.parse::<f32>().unwrap(), START);
+    let printed: f32 = to.parse().unwrap();
+    assert!(summary[2].contains(&format!(
+        "{}",
+        Path::new("out").join("result.json").display()
+    )));
+    // stderr is not a terminal here: a one-line record per iteration at most, the first and the last
+    // always, with the loss, the time so far and to go.
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    let records: Vec<&str> = stderr.lines().collect();
+    assert!(records.len() >= 2, "{stderr}");
+    assert!(
+        records[0].starts_with("progress: iteration 1/5: loss "),
+        "{stderr}"
+    );
+    assert!(
+        records
+            .last()
+            .unwrap()
+            .starts_with("progress: iteration 5/5: loss "),
+        "{stderr}"
+    );
+    assert!(records.last().unwrap().ends_with(", eta 0.0 s"), "{stderr}");
+    assert!(records.iter().all(|r| r.contains("; elapsed ")), "{stderr}");
     let out = dir.join("out");
     assert_eq!(
         listing(&out),
@@ -174,6 +206,7 @@ fn tiny_run_writes_every_output_and_moves_the_parameter() {
     let result = scene::load(&out.join("result.json")).unwrap();
     let radius = result.parameter("ball.radius").unwrap();
     println!("ball.radius {START} -> {radius} (target {TRUTH})");
+    assert_eq!(printed, radius);
     assert!(
         (radius - TRUTH).abs() < (START - TRUTH).abs() - 0.05,
         "radius {radius}"

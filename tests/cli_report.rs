@@ -199,8 +199,27 @@ fn report_of_the_image_with_computed_references() {
         "--budget",
         "1",
     ];
-    let stdout = assert_success(&run(&dir, &args));
+    let result = run(&dir, &args);
+    let stdout = assert_success(&result);
     assert!(stdout.contains("truncation"), "{stdout}");
+    // stderr is not a terminal here: one-line progress records, the first at once, the last at the
+    // end, each with the time so far and to go.
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    let records: Vec<&str> = stderr.lines().collect();
+    assert!(records.len() >= 2, "{stderr}");
+    for r in &records {
+        assert!(
+            r.starts_with("progress: ")
+                && r.contains("s of budget spent; ")
+                && r.contains(", eta "),
+            "{stderr}"
+        );
+    }
+    assert!(records[0].contains("; elapsed "), "{stderr}");
+    assert!(
+        records.last().unwrap().contains("; done; elapsed "),
+        "{stderr}"
+    );
     let out = dir.join("report");
     let rows = rows(&out.join("report.csv"));
     for r in &rows {

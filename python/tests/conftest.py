@@ -4,6 +4,7 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -46,17 +47,30 @@ def small():
     return make
 
 
-@pytest.fixture(scope="session")
-def cli():
-    """The command-line tool: $IMPLICIT_PSDR_CLI, else target/release/implicit-psdr, built with
-    cargo if it is missing (it reuses the release build of the dependencies the package made)."""
-    path = os.environ.get("IMPLICIT_PSDR_CLI") or str(ROOT / "target/release/implicit-psdr")
-    if not Path(path).exists():
+def installed_cli():
+    """The ``implicit-psdr`` command this package installed beside the interpreter, or None."""
+    path = Path(sys.executable).parent / "implicit-psdr"
+    return str(path) if path.exists() else None
+
+
+def cargo_cli():
+    """The Rust binary target/release/implicit-psdr, built with cargo if it is missing (it reuses the
+    release build of the dependencies the package made); skips the test without cargo."""
+    path = ROOT / "target/release/implicit-psdr"
+    if not path.exists():
         if shutil.which("cargo") is None:
             pytest.skip("no implicit-psdr binary and no cargo to build it")
         subprocess.run(
             ["cargo", "build", "--release", "--bin", "implicit-psdr"], cwd=ROOT, check=True
         )
+    return str(path)
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """The command-line tool: $IMPLICIT_PSDR_CLI, else the ``implicit-psdr`` command of this package,
+    else the Rust binary (see ``cargo_cli``)."""
+    path = os.environ.get("IMPLICIT_PSDR_CLI") or installed_cli() or cargo_cli()
 
     def run(*args, cwd):
         result = subprocess.run([path, *map(str, args)], cwd=cwd, capture_output=True, text=True)

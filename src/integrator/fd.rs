@@ -59,38 +59,59 @@ fn difference(
     h: f32,
     options: &RenderOptions,
 ) -> Result<(Image, RenderStats)> {
-    if !(h.is_finite() && h > 0.0) {
-        return Err(Error::Unsupported(format!(
-            "finite-difference step must be a positive number, got {h}"
-        )));
+    let pair = Pair::new(scene, name, h)?;
+    Ok(pair.render(options))
+}
+
+/// The two scenes of a central difference, checked: `π + h` and `π − h`, and their difference in
+/// `f32`.
+struct Pair {
+    plus: Scene,
+    minus: Scene,
+    step: f32,
+}
+
+impl Pair {
+    /// Errors: those of [`finite_difference`].
+    fn new(scene: &Scene, name: &str, h: f32) -> Result<Self> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::Unsupported(format!(
+                "finite-difference step must be a positive number, got {h}"
+            )));
+        }
+        let value = parameter_value(scene, name)?;
+        let (high, low) = (value + h, value - h);
+        let step = high - low;
+        if !(step.is_finite() && step > 0.0) {
+            return Err(Error::Unsupported(format!(
+                "finite-difference step {h} does not change {name} = {value} in f32"
+            )));
+        }
+        let with_step = |e| match e {
+            Error::Field { field, message } => Error::Field {
+                field,
+                message: format!(
+                    "{message} (the step h = {h} takes {name} = {value} to {high} and {low})"
+                ),
+            },
+            e => e,
+        };
+        let plus = scene.with_parameter(name, high).map_err(with_step)?;
+        let minus = scene.with_parameter(name, low).map_err(with_step)?;
+        Ok(Self { plus, minus, step })
     }
-    let value = parameter_value(scene, name)?;
-    let (high, low) = (value + h, value - h);
-    let step = high - low;
-    if !(step.is_finite() && step > 0.0) {
-        return Err(Error::Unsupported(format!(
-            "finite-difference step {h} does not change {name} = {value} in f32"
-        )));
+
+    /// The central difference and the counters of its two renders.
+    fn render(&self, options: &RenderOptions) -> (Image, RenderStats) {
+        let (image_plus, mut stats) = super::render(&self.plus, options);
+        let (image_minus, stats_minus) = super::render(&self.minus, options);
+        stats.absorb(stats_minus);
+        let mut derivative = image_plus;
+        for (d, m) in derivative.rgb.iter_mut().zip(&image_minus.rgb) {
+            *d = (*d - m) / self.step;
+        }
+        (derivative, stats)
     }
-    let with_step = |e| match e {
-        Error::Field { field, message } => Error::Field {
-            field,
-            message: format!(
-                "{message} (the step h = {h} takes {name} = {value} to {high} and {low})"
-            ),
-        },
-        e => e,
-    };
-    let plus = scene.with_parameter(name, high).map_err(with_step)?;
-    let minus = scene.with_parameter(name, low).map_err(with_step)?;
-    let (image_plus, mut stats) = super::render(&plus, options);
-    let (image_minus, stats_minus) = super::render(&minus, options);
-    stats.absorb(stats_minus);
-    let mut derivative = image_plus;
-    for (d, m) in derivative.rgb.iter_mut().zip(&image_minus.rgb) {
-        *d = (*d - m) / step;
-    }
-    Ok((derivative, stats))
 }
 
 /// The image at a parameter's value and its central difference, as the `fd` command writes them.
@@ -116,20 +137,91 @@ pub fn render_with_difference(
     h: Option<f32>,
     options: &RenderOptions,
 ) -> Result<FiniteDifference> {
-    let start = std::time::Instant::now();
-    let value = parameter_value(scene, name)?;
-    let h = h.unwrap_or_else(|| default_step(value));
-    let (derivative, stats_difference) = difference(scene, name, h, options)?;
-    let (image, mut stats) = super::render(scene, options);
-    stats.absorb(stats_difference);
-    stats.seconds = start.elapsed().as_secs_f64();
+    let mut all = render_with_differences(scene, std::slice::from_ref(&name), h, options)?;
+    let one = all.differences.pop().expect("one difference per name");
     Ok(FiniteDifference {
+        image: all.image,
+        derivative: one.derivative,
+        value: one.value,
+        h: one.h,
+        stats: all.stats,
+    })
+}
+
+/// The image and the central differences of several parameters, as the `fd` command writes them.
+#[derive(Clone, Debug)]
+pub struct FiniteDifferences {
+    /// The image at the parameters' current values.
+    pub image: Image,
+    /// One central difference per parameter, in the order asked.
+    pub differences: Vec<Difference>,
+    /// Counters of every render (the image and two per parameter); `seconds` is their total time.
+    pub stats: RenderStats,
+}
+
+/// The central difference of one parameter in [`FiniteDifferences`].
+#[derive(Clone, Debug)]
+pub struct Difference {
+    /// The parameter's name.
+    pub name: String,
+    /// The central difference ([`finite_difference`]), per unit of the parameter.
+    pub derivative: Image,
+    /// The parameter's current value.
+    pub value: f32,
+    /// The step used.
+    pub h: f32,
+}
+
+/// The image and the central difference of each parameter of `names`, each a pair of renders with
+/// the image's samples (`options`), with step `h` (default [`default_step`] of each value). Every
+/// name and both values of every parameter are checked before anything is rendered; errors: those
+/// of [`finite_difference`].
+pub fn render_with_differences(
+    scene: &Scene,
+    names: &[impl AsRef<str>],
+    h: Option<f32>,
+    options: &RenderOptions,
+) -> Result<FiniteDifferences> {
+    let start = std::time::Instant::now();
+    let mut pairs = Vec::with_capacity(names.len());
+    for name in names {
+        let name = name.as_ref();
+        let value = parameter_value(scene, name)?;
+        let h = h.unwrap_or_else(|| default_step(value));
+        pairs.push((name, value, h, Pair::new(scene, name, h)?));
+    }
+    let mut differences = Vec::with_capacity(pairs.len());
+    let mut all = RenderStats::default();
+    for (name, value, h, pair) in pairs {
+        let (derivative, stats) = pair.render(options);
+        all.absorb(stats);
+        differences.push(Difference {
+            name: name.to_string(),
+            derivative,
+            value,
+            h,
+        });
+    }
+    let (image, mut stats) = super::render(scene, options);
+    stats.absorb(all);
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(FiniteDifferences {
         image,
-        derivative,
-        value,
-        h,
+        differences,
         stats,
     })
+}
+
+impl FiniteDifferences {
+    /// The EXR channels of the `fd` command: `R`, `G`, `B` (the image) and `d.P.R|G|B` per parameter
+    /// `P`, the same names as the derivative commands'.
+    pub fn channels(&self) -> Channels {
+        let mut channels = self.image.rgb_channels("");
+        for d in &self.differences {
+            channels.extend(d.derivative.rgb_channels(&format!("d.{}.", d.name)));
+        }
+        channels
+    }
 }
 
 impl FiniteDifference {

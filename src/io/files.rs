@@ -36,16 +36,15 @@ pub fn file_name(path: &Path) -> String {
     name.to_string_lossy().into_owned()
 }
 
-/// Checks, before anything is rendered, that `path` can be an output file: its folder exists, it is
-/// not a folder, and it ends in `.extension` (case-insensitive). `what` names it in the error
-/// (e.g. `--out`).
+/// Checks, before anything is rendered, that `path` can be an output file: its folder exists or can
+/// be created (no file stands where a folder of its path would be), it is not a folder, and it ends in
+/// `.extension` (case-insensitive). `what` names it in the error (e.g. `--out`).
+///
+/// One rule for every output: a missing folder is created when the file is written
+/// ([`create_parent`]), never before, so a run that fails creates nothing.
 pub fn check_output_path(path: &Path, what: &str, extension: &str) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let problem = if !dir.is_dir() {
-        format!("folder {} does not exist", dir.display())
+    let problem = if let Some(file) = blocking_file(parent(path)) {
+        format!("{} is a file, not a folder", file.display())
     } else if path.is_dir() {
         "is a folder".to_string()
     } else if !path
@@ -62,6 +61,39 @@ pub fn check_output_path(path: &Path, what: &str, extension: &str) -> Result<()>
     )))
 }
 
+/// Checks, before anything is rendered, that the output folder `dir` exists or can be created (no
+/// file stands where it or one of its parents would be). `what` names it in the error.
+pub fn check_output_folder(dir: &Path, what: &str) -> Result<()> {
+    match blocking_file(dir) {
+        Some(file) => Err(Error::Unsupported(format!(
+            "{what} {}: {} is a file, not a folder",
+            dir.display(),
+            file.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The file that stands where the folder `dir` or one of its parents would be, if any.
+fn blocking_file(dir: &Path) -> Option<&Path> {
+    dir.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir())
+}
+
+/// The folder `path` is in (`.` for a bare file name).
+fn parent(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Creates the folder of the output file `path` if it is missing (with its missing parents); every
+/// writer of this module calls it just before it writes.
+pub fn create_parent(path: &Path) -> Result<()> {
+    let dir = parent(path);
+    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create: {e}")))
+}
+
 /// Writes `channels` (planes of `width × height`) to the EXR `exr`, then `picture` to the PNG `png`;
 /// removes the EXR if the PNG fails, so the pair is written all or nothing.
 pub fn write_exr_and_png(
@@ -71,6 +103,8 @@ pub fn write_exr_and_png(
     channels: &super::Channels,
     picture: &crate::film::Image,
 ) -> Result<()> {
+    create_parent(exr)?;
+    create_parent(png)?;
     super::write_exr(exr, width, height, channels)?;
     if let Err(e) = super::write_png(png, picture.width, picture.height, &picture.rgb) {
         let _ = std::fs::remove_file(exr);
@@ -104,6 +138,10 @@ pub fn write_all_or_nothing(files: Vec<(PathBuf, Writer)>) -> Result<()> {
     let mut renamed = Vec::new();
     let mut result = Ok(());
     for (path, write) in files {
+        if let Err(e) = create_parent(&path) {
+            result = Err(e);
+            break;
+        }
         let tmp = temporary_path(&path);
         temporaries.push((tmp.clone(), path.clone()));
         result = write(&tmp).map_err(|e| Error::file(&path, e));

@@ -2,7 +2,7 @@
 //! face a `uchar` count and three `int` indices) or Wavefront OBJ (`v`, `vn` and `f a//a b//b c//c`,
 //! indices from 1), chosen by the extension. Both are read by MeshLab, Blender, Open3D and trimesh.
 
-use super::files::write_atomically;
+use super::files::{create_parent, write_atomically};
 use crate::error::{Error, Result};
 use crate::mesh::TriangleMesh;
 use std::fmt::Write as _;
@@ -11,7 +11,8 @@ use std::path::Path;
 /// The mesh formats [`write_mesh`] writes, by extension.
 pub const MESH_EXTENSIONS: [&str; 2] = ["ply", "obj"];
 
-/// Writes `mesh` to `path` as binary PLY (`.ply`) or OBJ (`.obj`), whole or not at all. Errors: another
+/// Writes `mesh` to `path` as binary PLY (`.ply`) or OBJ (`.obj`), whole or not at all (its folder
+/// created if missing). Errors: another
 /// extension, a write failure (naming the file).
 pub fn write_mesh(path: &Path, mesh: &TriangleMesh) -> Result<()> {
     let bytes = match extension(path).as_deref() {
@@ -21,6 +22,7 @@ pub fn write_mesh(path: &Path, mesh: &TriangleMesh) -> Result<()> {
             return Err(Error::file(path, "a mesh file must end in .ply or .obj"));
         }
     };
+    create_parent(path)?;
     write_atomically(path, |tmp| {
         std::fs::write(tmp, &bytes).map_err(|e| Error::file(path, format!("cannot write: {e}")))
     })

@@ -13,8 +13,8 @@ pub mod png;
 
 pub use exr::{Channels, read_exr, read_exr_rgb, rgb_from_channels, write_exr};
 pub use files::{
-    Writer, bytes_writer, check_output_path, file_message, file_name, write_all_or_nothing,
-    write_exr_and_png,
+    Writer, bytes_writer, check_output_folder, check_output_path, create_parent, file_message,
+    file_name, write_all_or_nothing, write_exr_and_png,
 };
 pub use mesh::{MESH_EXTENSIONS, write_mesh};
 pub use npy::{read_npy, write_npy};

@@ -176,6 +176,7 @@ fn encode_npy(grid: &GridData) -> Vec<u8> {
 /// temporary file beside `path` that is then renamed over it, so a failure never leaves a partial file.
 pub fn write_npy(path: &Path, grid: &GridData) -> Result<()> {
     grid.validate(&path.display().to_string())?;
+    super::create_parent(path)?;
     let bytes = encode_npy(grid);
     let mut tmp_name = path
         .file_name()

@@ -39,8 +39,18 @@ pub(crate) fn gradient_to_py<'py>(
 }
 
 /// Any array-like as `float32` values in C order with their shape. `what` names the argument in
-/// errors.
+/// errors. A numpy array must hold floats: an integer or boolean array is refused, as a `.npy` grid
+/// file of that dtype is, rather than converted silently.
 fn values(what: &str, array: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f32>)> {
+    if let Ok(dtype) = array.getattr("dtype")
+        && let Ok(kind) = dtype.getattr("kind").and_then(|k| k.extract::<String>())
+        && kind != "f"
+    {
+        return Err(PyValueError::new_err(format!(
+            "{what}: expected an array of floats (float32 or float64), got dtype {}",
+            dtype.str().map_or("?".into(), |s| s.to_string())
+        )));
+    }
     let array: PyArrayLikeDyn<'_, f32, AllowTypeChange> = array.extract().map_err(|e| {
         PyValueError::new_err(format!("{what}: expected an array of numbers ({e})"))
     })?;
@@ -127,4 +137,64 @@ pub(crate) fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'p
         out.set_item(name, array)?;
     }
     Ok(out)
+}
+
+/// Writes an EXR file of float32 channels, as the command-line tool writes them, from ``channels``:
+/// a dict ``name -> array``, each array ``(height, width)`` (one channel) or ``(height, width, 3)``
+/// (three: ``"image"`` gives ``R``, ``G``, ``B``, and any other name ``N`` gives ``N.R``, ``N.G``,
+/// ``N.B``), all of one image size. So ``write_exr(path, diff(scene, "ball.radius"))`` writes the
+/// channels of ``implicit-psdr diff``, and ``read_exr`` reads them back. A missing folder is
+/// created. Raises ``ValueError`` for arrays of other shapes or sizes, ``SceneError`` for a path
+/// that cannot be written.
+#[pyfunction]
+pub(crate) fn write_exr(
+    py: Python<'_>,
+    path: PathBuf,
+    channels: &Bound<'_, PyDict>,
+) -> PyResult<()> {
+    let mut out: film::Channels = Vec::new();
+    let mut size: Option<(usize, usize)> = None;
+    for (name, array) in channels.iter() {
+        let name: String = name.extract()?;
+        let what = format!("channels['{name}']");
+        let (shape, values) = values(&what, &array)?;
+        let (h, w, planes) = match shape.as_slice() {
+            [h, w] => (*h, *w, vec![(name.clone(), values)]),
+            [h, w, 3] => {
+                let prefix = if name == "image" {
+                    String::new()
+                } else {
+                    format!("{name}.")
+                };
+                let planes = (0..3)
+                    .map(|c| {
+                        let plane = values.iter().skip(c).step_by(3).copied().collect();
+                        (format!("{prefix}{}", ["R", "G", "B"][c]), plane)
+                    })
+                    .collect();
+                (*h, *w, planes)
+            }
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "{what}: expected shape (height, width) or (height, width, 3), got {}",
+                    tuple(&shape)
+                )));
+            }
+        };
+        if *size.get_or_insert((h, w)) != (h, w) || h == 0 || w == 0 {
+            return Err(PyValueError::new_err(format!(
+                "{what}: every channel must be of one non-empty size, got {}",
+                tuple(&shape)
+            )));
+        }
+        out.extend(planes);
+    }
+    let Some((h, w)) = size else {
+        return Err(PyValueError::new_err("channels: give at least one channel"));
+    };
+    py.detach(|| {
+        crate::io::create_parent(&path)?;
+        film::write_exr(&path, w as u32, h as u32, &out)
+    })
+    .map_err(super::scene_error)
 }

@@ -1,6 +1,7 @@
 //! `grad`: a loss and its gradient in reverse mode, as the `grad` command computes them, or the
 //! gradient of any pixel adjoint (a loss of the caller's own).
 
+use super::args;
 use super::arrays::{gradient_to_py, image_from_py};
 use super::render::{diff_options, warn};
 use super::scene::PyScene;
@@ -31,8 +32,8 @@ enum Against {
 /// ``spp`` (default: the scene's), ``seed`` (default 0), the boundary budgets and
 /// ``normalization`` and ``velocity_field`` are those of ``diff``; ``threads`` caps this call's threads.
 #[pyfunction]
-#[pyo3(signature = (scene, target = None, loss = "l2", adjoint = None, params = Vec::new(),
-                    grids = Vec::new(), *, spp = None, seed = 0, spp_primary = None,
+#[pyo3(signature = (scene, target = None, loss = "l2", adjoint = None, params = None,
+                    grids = None, *, spp = None, seed = 0, spp_primary = None,
                     spp_secondary = None, normalization = "differentiable", velocity_field = "auto",
                     threads = None))]
 #[allow(clippy::too_many_arguments)]
@@ -42,16 +43,18 @@ pub(crate) fn grad<'py>(
     target: Option<&Bound<'py, PyAny>>,
     loss: &str,
     adjoint: Option<&Bound<'py, PyAny>>,
-    params: Vec<String>,
-    grids: Vec<String>,
-    spp: Option<u32>,
-    seed: u64,
-    spp_primary: Option<u32>,
-    spp_secondary: Option<u32>,
+    params: Option<&Bound<'py, PyAny>>,
+    grids: Option<&Bound<'py, PyAny>>,
+    spp: Option<i64>,
+    seed: i128,
+    spp_primary: Option<i64>,
+    spp_secondary: Option<i64>,
     normalization: &str,
     velocity_field: &str,
-    threads: Option<usize>,
+    threads: Option<i64>,
 ) -> PyResult<(Option<f64>, Bound<'py, PyDict>)> {
+    let (params, grids) = (args::names("params", params)?, args::names("grids", grids)?);
+    let threads = args::threads(threads)?;
     let scene = scene.scene.clone();
     let size = (scene.camera.width, scene.camera.height);
     let loss: Loss = loss

@@ -8,19 +8,24 @@
 //! message; malformed arguments (shapes, dtypes, non-finite values) become `ValueError`; a panic (a
 //! bug) becomes `RuntimeError` rather than crossing into Python.
 
+mod args;
 mod arrays;
+mod cli;
 mod grad;
 mod mesh;
 mod optimize;
 mod render;
 mod scene;
+mod tools;
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
+// Named after the package that re-exports it, so that its repr and tracebacks read
+// `implicit_psdr.SceneError`.
 create_exception!(
-    _native,
+    implicit_psdr,
     SceneError,
     PyValueError,
     "An invalid scene, parameter, grid or request, with the library's one-line message naming the \
@@ -74,8 +79,8 @@ pub(crate) fn run_detached<T: Send>(
     })
 }
 
-/// The extension module: the `Scene` class, `render`, `diff`, `grad`, `optimize`, `read_exr` and
-/// `extract_mesh`.
+/// The extension module: the `Scene` class, `render`, `diff`, `fd`, `grad`, `bake`, `optimize`,
+/// `read_exr`, `write_exr`, `extract_mesh`, and `cli` (the command-line tool).
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
@@ -86,7 +91,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(grad::grad, m)?)?;
     m.add_function(wrap_pyfunction!(optimize::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(arrays::write_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::fd, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::bake, m)?)?;
     m.add_function(wrap_pyfunction!(mesh::extract_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(cli::cli, m)?)?;
     m.add("DEFAULT_SEED", 0u64)?;
     Ok(())
 }

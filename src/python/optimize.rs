@@ -31,8 +31,9 @@ pub(crate) fn optimize<'py>(
     config: &Bound<'py, PyAny>,
     out: Option<PathBuf>,
     base_dir: Option<PathBuf>,
-    threads: Option<usize>,
+    threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let threads = super::args::threads(threads)?;
     // A dict is read here, with the GIL; a file (and the scenes either names) in the run.
     let doc = match config.cast::<PyDict>() {
         Ok(dict) => Ok(to_json(dict.as_any(), CONFIG_NAME).map_err(|e| scene_error(in_config(e)))?),

@@ -1,6 +1,7 @@
 //! `render` and `diff`: the image, and derivative images in forward mode, as the `render` and `diff`
 //! commands compute them.
 
+use super::args;
 use super::arrays::image_to_py;
 use super::scene::PyScene;
 use super::{run_detached, scene_error};
@@ -17,15 +18,12 @@ use std::sync::Arc;
 /// The render options of a call: `spp` (default the scene's, as the command-line tool) and `seed`.
 pub(crate) fn render_options(
     scene: &Scene,
-    spp: Option<u32>,
-    seed: u64,
+    spp: Option<i64>,
+    seed: i128,
 ) -> PyResult<RenderOptions> {
-    if spp == Some(0) {
-        return Err(PyValueError::new_err("spp: must be >= 1, got 0"));
-    }
     Ok(RenderOptions {
-        spp: spp.unwrap_or(scene.spp),
-        seed,
+        spp: args::count("spp", spp, 1)?.unwrap_or(scene.spp),
+        seed: args::seed(seed)?,
         ..RenderOptions::default()
     })
 }
@@ -35,8 +33,8 @@ pub(crate) fn render_options(
 /// (`"auto"`, `"normal"` or `"carried"`), as the tool's.
 pub(crate) fn diff_options(
     scene: &Scene,
-    (spp, seed): (Option<u32>, u64),
-    (primary_spp, secondary_spp): (Option<u32>, Option<u32>),
+    (spp, seed): (Option<i64>, i128),
+    (primary_spp, secondary_spp): (Option<i64>, Option<i64>),
     (normalization, velocity_field): (&str, &str),
 ) -> PyResult<DiffOptions> {
     let normalization: Normalization = normalization
@@ -49,8 +47,8 @@ pub(crate) fn diff_options(
         render: render_options(scene, spp, seed)?,
         normalization,
         boundary: BoundaryBudget {
-            primary_spp,
-            secondary_spp,
+            primary_spp: args::count("spp_primary", primary_spp, 0)?,
+            secondary_spp: args::count("spp_secondary", secondary_spp, 0)?,
         },
         velocity,
     })
@@ -59,7 +57,12 @@ pub(crate) fn diff_options(
 /// Issues what went wrong during a render (rays out of steps, non-finite samples) as Python
 /// warnings, the lines the command-line tool prints.
 pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
-    for line in stats.warnings() {
+    warn_lines(py, stats.warnings())
+}
+
+/// Issues each line as a Python `RuntimeWarning`.
+pub(crate) fn warn_lines(py: Python<'_>, lines: Vec<String>) -> PyResult<()> {
+    for line in lines {
         let message = std::ffi::CString::new(line.replace('\0', " "))
             .expect("no interior NUL after replacing them");
         PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
@@ -76,12 +79,13 @@ pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
 pub(crate) fn render<'py>(
     py: Python<'py>,
     scene: &PyScene,
-    spp: Option<u32>,
-    seed: u64,
-    threads: Option<usize>,
+    spp: Option<i64>,
+    seed: i128,
+    threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let scene = scene.scene.clone();
     let options = render_options(&scene, spp, seed)?;
+    let threads = args::threads(threads)?;
     let (image, stats) = run_detached(py, threads, move || integrator::render(&scene, &options))?;
     warn(py, &stats)?;
     Ok(image_to_py(py, &image).into_any())
@@ -99,24 +103,26 @@ pub(crate) fn render<'py>(
 /// (default ``ceil(spp/32)``, ``ceil(spp/8)``), ``normalization`` ``"differentiable"`` or
 /// ``"fixed"``, ``velocity_field`` ``"auto"``, ``"normal"`` or ``"carried"`` (as ``--velocity-field``).
 #[pyfunction]
-#[pyo3(signature = (scene, params = Vec::new(), *, spp = None, seed = 0, terms = false,
+#[pyo3(signature = (scene, params = None, *, spp = None, seed = 0, terms = false,
                     grid_directions = None, spp_primary = None, spp_secondary = None,
                     normalization = "differentiable", velocity_field = "auto", threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn diff<'py>(
     py: Python<'py>,
     scene: &PyScene,
-    params: Vec<String>,
-    spp: Option<u32>,
-    seed: u64,
+    params: Option<&Bound<'py, PyAny>>,
+    spp: Option<i64>,
+    seed: i128,
     terms: bool,
     grid_directions: Option<&Bound<'py, PyDict>>,
-    spp_primary: Option<u32>,
-    spp_secondary: Option<u32>,
+    spp_primary: Option<i64>,
+    spp_secondary: Option<i64>,
     normalization: &str,
     velocity_field: &str,
-    threads: Option<usize>,
+    threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let params = args::names("params", params)?;
+    let threads = args::threads(threads)?;
     let scene = scene.scene.clone();
     let options = diff_options(
         &scene,

@@ -2,6 +2,7 @@
 //! (so that Ray can ship it to other processes).
 
 use super::arrays::{grid_from_py, grid_to_py};
+use super::render::warn_lines;
 use super::scene_error;
 use crate::scene::{self, ParameterEntry, Scene, patch};
 use crate::sdf::{self, GridData};
@@ -31,7 +32,8 @@ pub(crate) struct PyScene {
 #[pymethods]
 impl PyScene {
     /// Loads a scene file (JSON); relative grid ``file`` names resolve against its folder. Raises
-    /// ``SceneError`` naming the file and the field.
+    /// ``SceneError`` naming the file and the field. Warns (``RuntimeWarning``) about a shape outside
+    /// the camera's view and a rectangle light that lights nothing the camera sees, as the tool does.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let loaded = py.detach(|| {
@@ -41,7 +43,9 @@ impl PyScene {
             let doc = serde_json::from_str(&text).map_err(|e| crate::Error::file(&path, e))?;
             Ok::<_, crate::Error>(Self { scene, doc })
         });
-        loaded.map_err(scene_error)
+        let loaded = loaded.map_err(scene_error)?;
+        warn_lines(py, loaded.scene.reach_warnings())?;
+        Ok(loaded)
     }
 
     /// A scene from a dict of the scene file's structure (as ``json.load`` returns it). Relative
@@ -52,7 +56,9 @@ impl PyScene {
     fn from_dict(scene: &Bound<'_, PyAny>, base_dir: Option<PathBuf>) -> PyResult<Self> {
         let doc = to_json(scene, "scene").map_err(scene_error)?;
         let base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
-        Self::parse(doc, &base_dir).map_err(scene_error)
+        let parsed = Self::parse(doc, &base_dir).map_err(scene_error)?;
+        warn_lines(scene.py(), parsed.scene.reach_warnings())?;
+        Ok(parsed)
     }
 
     /// Every parameter, in the order of the ``params`` command: ``name -> value`` (a float), and
@@ -98,6 +104,41 @@ impl PyScene {
         let node = self.scene.grid_node(node);
         let data = self.scene.grid_values(&node).map_err(scene_error)?;
         Ok(grid_to_py(py, &data))
+    }
+
+    /// The scene as a dict of the scene file's structure (what ``json.load`` of its file gives), with
+    /// every parameter's current value written where the file keeps it. Grid nodes keep their
+    /// ``file``, which holds the values the scene was loaded with: ``save`` writes changed grids too.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let doc = patch::patched_scene_json(&self.doc, &self.scene, &[]).map_err(scene_error)?;
+        let json = py.import("json")?;
+        json.call_method1("loads", (doc.to_string(),))
+    }
+
+    /// Writes the scene to the scene file ``path`` (``.json``; a missing folder is created), with
+    /// every parameter's current value and every grid's current values: grid node ``NODE`` goes to
+    /// ``<stem>.NODE.npy`` beside it (``<stem>`` the file's name without ``.json``), and the file
+    /// names it so. ``Scene.load(path)`` gives this scene back; ``implicit-psdr render path``
+    /// renders it. Raises ``SceneError`` for a path that cannot be written (nothing is written then).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        crate::io::check_output_path(&path, "path", "json").map_err(scene_error)?;
+        let stem = (path.file_stem()).map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let blocks = self.scene.grid_blocks();
+        let files: Vec<(String, String)> = (blocks.iter())
+            .map(|b| (b.node.clone(), format!("{stem}.{}.npy", b.node)))
+            .collect();
+        let doc = patch::patched_scene_json(&self.doc, &self.scene, &files).map_err(scene_error)?;
+        let folder = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mut writes: Vec<(PathBuf, crate::io::Writer)> = Vec::new();
+        for (block, (_, file)) in blocks.iter().zip(&files) {
+            let data = self.scene.grid_values(&block.node).map_err(scene_error)?;
+            writes.push((
+                folder.join(file),
+                Box::new(move |tmp| sdf::write_npy(tmp, &data).map_err(crate::io::file_message)),
+            ));
+        }
+        writes.push((path, crate::io::bytes_writer(patch::scene_text(&doc))));
+        crate::io::write_all_or_nothing(writes).map_err(scene_error)
     }
 
     /// An independent copy (changing one does not change the other).

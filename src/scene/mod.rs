@@ -6,7 +6,9 @@ mod integrator_kind;
 pub(crate) mod json;
 mod params;
 pub mod patch;
+mod reach;
 mod selection;
+pub mod settings;
 
 pub use grids::{GridBlock, GridDirection, ParameterEntry};
 pub use integrator_kind::IntegratorKind;

@@ -1,15 +1,15 @@
 //! The `grad` command: the loss of the image against a target and its reverse-mode gradient, written
 //! as grad.json and one `.npy` per grid.
 
-use crate::args::GradArgs;
-use crate::{diff_options, in_file, prepare, warn};
+use crate::cli::args::GradArgs;
+use crate::cli::{diff_options, in_file, prepare, warn};
+use crate::film::Image;
+use crate::integrator::diff::terms_note;
+use crate::integrator::{GradientLayout, loss_gradient};
+use crate::io::{self, Writer, file_message, file_name};
+use crate::scene::GridBlock;
+use crate::sdf::GridData;
 use anyhow::{Result, bail};
-use implicit_psdr::film::Image;
-use implicit_psdr::integrator::diff::terms_note;
-use implicit_psdr::integrator::{GradientLayout, loss_gradient};
-use implicit_psdr::io::{self, Writer, file_message, file_name};
-use implicit_psdr::scene::GridBlock;
-use implicit_psdr::sdf::GridData;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -172,7 +172,7 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
         result.loss,
         args.target.display(),
         join_and(&wrt),
-        implicit_psdr::integrator::gradient::adjoint_seed(seed),
+        crate::integrator::gradient::adjoint_seed(seed),
         result.gradient.stats.seconds,
         join_and(&written)
     )?;

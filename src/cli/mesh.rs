@@ -1,9 +1,9 @@
 //! The `mesh` command: a shape's surface as a triangle mesh file.
 
-use crate::args::MeshArgs;
-use crate::load_scene;
+use crate::cli::args::MeshArgs;
+use crate::cli::load_scene;
+use crate::{io, mesh};
 use anyhow::{Context, Result, bail};
-use implicit_psdr::{io, mesh};
 use std::path::PathBuf;
 
 pub(crate) fn mesh(args: &MeshArgs) -> Result<()> {

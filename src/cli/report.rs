@@ -1,18 +1,19 @@
 //! The `report` command: speed against error of the estimators for the scene's parameters, as a CSV,
 //! a Markdown table and a plot (PNG and SVG) in one folder. The protocol is the library's
-//! (`implicit_psdr::report`); this prints, shows progress and writes.
+//! ([`crate::report`]); this prints, shows progress and writes.
 //!
 //! Everything is checked (scene, parameters, estimators, budget, reference) before anything long is
 //! rendered and before the folder is touched; the four files are written to temporary names and
 //! renamed only when all are written.
 
-use crate::args::ReportArgs;
-use crate::load_scene;
+use crate::cli::args::ReportArgs;
+use crate::cli::load_scene;
+use crate::cli::records::Records;
+use crate::integrator::fd;
+use crate::io::{Writer, write_all_or_nothing};
+use crate::report::{self, Estimator, Status, plot, summary};
 use anyhow::{Context, Result, bail};
-use implicit_psdr::integrator::fd;
-use implicit_psdr::io::{Writer, write_all_or_nothing};
-use implicit_psdr::report::{self, Estimator, Status, plot, summary};
-use std::io::IsTerminal;
+use std::cell::{Cell, RefCell};
 
 pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
@@ -24,13 +25,14 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     for p in &args.params {
         // The error names `--param` and the parameter itself, as `fd`'s does.
         fd::parameter_value(&scene, p)
-            .map_err(crate::flagged)
+            .map_err(crate::cli::flagged)
             .with_context(|| args.scene.display().to_string())?;
     }
     let out = &args.out;
     if out.exists() && !out.is_dir() {
         bail!("--out {}: is not a folder", out.display());
     }
+    crate::io::check_output_folder(out, "--out")?;
     let given = match &args.reference {
         Some(path) => {
             let size = (scene.camera.width, scene.camera.height);
@@ -45,7 +47,7 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
         args.budget,
         given.is_none(),
     )
-    .map_err(crate::flagged)?;
+    .map_err(crate::cli::flagged)?;
     for s in &plan.skipped {
         let name = summary::section_name(s.parameter.as_deref());
         outln!("skipped {} for {name}: {}", s.estimator.name(), s.reason)?;
@@ -105,25 +107,67 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
     Ok(())
 }
 
-/// A progress bar over the budget's seconds, with the series and spp running, on stderr when it is a
-/// terminal.
-struct Bar(Option<indicatif::ProgressBar>);
+/// The progress of a report on stderr, over the budget's seconds with the series and spp running: a
+/// bar on a terminal, one-line records elsewhere.
+enum Bar {
+    Terminal(indicatif::ProgressBar),
+    Records {
+        records: RefCell<Records>,
+        budget: f64,
+        spent: Cell<f64>,
+    },
+}
 
 impl Bar {
     fn new(budget: f64) -> Self {
-        if !std::io::stderr().is_terminal() {
-            return Self(None);
+        if let Some(records) = Records::new() {
+            return Self::Records {
+                records: RefCell::new(records),
+                budget,
+                spent: Cell::new(0.0),
+            };
         }
         let bar = indicatif::ProgressBar::new((budget * 1e3) as u64);
         bar.set_style(
             indicatif::ProgressStyle::with_template("{bar:40} {msg} {elapsed}")
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
-        Self(Some(bar))
+        Self::Terminal(bar)
     }
 
     fn show(&self, status: Status<'_>) {
-        let Some(bar) = &self.0 else { return };
+        let bar = match self {
+            Self::Terminal(bar) => bar,
+            Self::Records {
+                records,
+                budget,
+                spent,
+            } => {
+                if let Status::Run { spent: s, .. } = status {
+                    spent.set(s);
+                }
+                let what = || {
+                    let now = match status {
+                        Status::Reference { parameter, spp } => {
+                            let name = summary::section_name(parameter);
+                            format!("reference of {name} at {spp} spp")
+                        }
+                        Status::Run {
+                            parameter,
+                            estimator,
+                            spp,
+                            ..
+                        } => {
+                            let name = summary::section_name(parameter);
+                            format!("{name}: {} at {spp} spp", estimator.name())
+                        }
+                    };
+                    format!("{:.1} of {budget:.1} s of budget spent; {now}", spent.get())
+                };
+                records.borrow_mut().record(spent.get(), *budget, what);
+                return;
+            }
+        };
         match status {
             Status::Reference { parameter, spp } => {
                 let name = summary::section_name(parameter);
@@ -143,8 +187,15 @@ impl Bar {
     }
 
     fn finish(&self) {
-        if let Some(bar) = &self.0 {
-            bar.finish_and_clear();
+        match self {
+            Self::Terminal(bar) => bar.finish_and_clear(),
+            Self::Records {
+                records,
+                budget,
+                spent,
+            } => records.borrow_mut().record(*budget, *budget, || {
+                format!("{:.1} of {budget:.1} s of budget spent; done", spent.get())
+            }),
         }
     }
 }

@@ -1,10 +1,10 @@
 //! The `render` command: the image as an EXR and a PNG.
 
-use crate::args::{OutputArgs, SceneArgs};
-use crate::{output_paths, prepare, warn};
+use crate::cli::args::{OutputArgs, SceneArgs};
+use crate::cli::{output_paths, prepare, warn};
+use crate::integrator;
+use crate::io;
 use anyhow::Result;
-use implicit_psdr::integrator;
-use implicit_psdr::io;
 
 pub(crate) fn render(args: &SceneArgs, outputs: &OutputArgs) -> Result<()> {
     let (out, png) = output_paths(outputs, "out")?;

@@ -1,8 +1,8 @@
 //! The `params` command: every parameter of a scene with its value, and each grid's block of values.
 
-use crate::{load_scene, write_stdout};
+use crate::cli::{load_scene, write_stdout};
+use crate::scene::{ParameterEntry, Scene};
 use anyhow::Result;
-use implicit_psdr::scene::{ParameterEntry, Scene};
 use std::fmt::Write as _;
 use std::path::Path;
 

@@ -1,8 +1,9 @@
 //! The command line: subcommands, their arguments and help texts, and the parsers of argument values.
 
+use crate::integrator::VelocityField;
+use crate::integrator::{Loss, Normalization};
+use crate::scene::settings;
 use clap::{ArgGroup, Args, Parser, Subcommand};
-use implicit_psdr::integrator::VelocityField;
-use implicit_psdr::integrator::{Loss, Normalization};
 use std::path::PathBuf;
 
 /// Physically based rendering of implicit surfaces.
@@ -24,15 +25,17 @@ pub(crate) struct SceneArgs {
     /// Seed of the deterministic sampler.
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,
-    /// Override a parameter listed by `params` (repeatable), e.g. `--set ball.radius=0.8`.
+    /// Override a parameter listed by `params` (repeatable), e.g. `--set ball.radius=0.8`, or a
+    /// setting: camera.width, camera.height, spp, integrator (direct or path), integrator.max_depth.
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = assignment)]
-    pub(crate) set: Vec<(String, f32)>,
+    pub(crate) set: Vec<(String, String)>,
 }
 
 /// Output files of the rendering commands; the defaults are `<command>.exr` and `<command>.png`.
 #[derive(Args, Debug)]
 pub(crate) struct OutputArgs {
-    /// Output EXR file (`.exr`) [default: <command>.exr, e.g. out.exr for render].
+    /// Output EXR file (`.exr`; a missing folder is created) [default: <command>.exr, e.g. out.exr for
+    /// render].
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// Output PNG file (`.png`) [default: <command>.png, e.g. out.png for render].
@@ -72,8 +75,9 @@ pub(crate) enum Command {
     /// scene parameters and grid values, to a JSON file (the loss and one number per parameter) and one
     /// float32 .npy per grid (the gradient of each value, shape [nz, ny, nx]).
     Grad(GradArgs),
-    /// Central finite differences of the image with respect to one parameter, with common random numbers
-    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B` at P, and `d.P.R|G|B`) and a PNG.
+    /// Central finite differences of the image with respect to parameters, with common random numbers
+    /// (the same samples at P + h and P − h), to an EXR (`R`, `G`, `B`, and `d.P.R|G|B` per parameter
+    /// P) and a PNG.
     Fd(FdArgs),
     /// Inverse rendering: optimise scene parameters and grid values so that renders from several
     /// views match target images, as OPT.json describes (see docs/inverse-rendering.md). Writes into
@@ -229,7 +233,7 @@ pub(crate) struct ReportArgs {
     pub(crate) reference: Option<PathBuf>,
     /// Seconds of estimator runs in all, shared evenly between the (parameter, estimator) series and
     /// the image; the references come on top.
-    #[arg(long, value_name = "SECONDS", default_value_t = implicit_psdr::report::DEFAULT_BUDGET,
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::report::DEFAULT_BUDGET,
           allow_negative_numbers = true, value_parser = positive_f64)]
     pub(crate) budget: f64,
     /// Comma-separated estimators: complete, interior, complete-boundary-x4, complete-boundary-div4,
@@ -245,21 +249,27 @@ pub(crate) struct ReportArgs {
 pub(crate) struct FdArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
-    /// The parameter (see `params`).
-    #[arg(long = "param", value_name = "P")]
-    pub(crate) param: String,
-    /// Step, a finite number > 0 (default: 0.01 · max(|P|, 1)).
+    /// A parameter (repeat for several, each a pair of renders with the image's samples; see
+    /// `params`).
+    #[arg(long = "param", value_name = "P", required = true)]
+    pub(crate) params: Vec<String>,
+    /// Step, a finite number > 0, for every parameter (default: 0.01 · max(|P|, 1) for each).
     #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
     pub(crate) h: Option<f32>,
     #[command(flatten)]
     pub(crate) outputs: OutputArgs,
 }
 
-/// `NAME=VALUE` with a finite value.
-pub(crate) fn assignment(text: &str) -> Result<(String, f32), String> {
+/// `NAME=VALUE`: a parameter with a finite value, or a setting with a value its field's rules judge
+/// later (see [`crate::scene::settings`]).
+pub(crate) fn assignment(text: &str) -> Result<(String, String), String> {
     let (name, value) = text.split_once('=').ok_or("expected NAME=VALUE")?;
-    match value.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok((name.trim().to_string(), v)),
+    let (name, value) = (name.trim().to_string(), value.trim().to_string());
+    if settings::is_setting(&name) {
+        return Ok((name, value));
+    }
+    match value.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok((name, value)),
         _ => Err(format!("{value:?} is not a finite number")),
     }
 }

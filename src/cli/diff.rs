@@ -1,12 +1,12 @@
 //! The `diff` command: the image and its derivatives in forward mode (named parameters and grid
 //! directions), as EXR channels and a PNG of colour-mapped panels.
 
-use crate::args::DiffArgs;
-use crate::{diff_options, in_file, output_paths, prepare, warn, write_derivatives};
+use crate::cli::args::DiffArgs;
+use crate::cli::{diff_options, in_file, output_paths, prepare, warn, write_derivatives};
+use crate::integrator;
+use crate::io;
+use crate::scene::GridDirection;
 use anyhow::Result;
-use implicit_psdr::integrator;
-use implicit_psdr::io;
-use implicit_psdr::scene::GridDirection;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -41,9 +41,7 @@ pub(crate) fn diff(args: &DiffArgs) -> Result<()> {
 
 /// The forward-mode directions `(node, U.npy)` of `diff --grid-direction`, read. Errors: an
 /// unreadable U (a U of another shape than its grid is reported when selected, naming its file).
-fn read_directions(
-    directions: &[(String, PathBuf)],
-) -> Result<Vec<GridDirection>, implicit_psdr::Error> {
+fn read_directions(directions: &[(String, PathBuf)]) -> Result<Vec<GridDirection>, crate::Error> {
     let mut read = Vec::new();
     for (node, file) in directions {
         let u = io::read_npy(file)?;

@@ -1,10 +1,10 @@
 //! The `bake` command: a shape's SDF sampled on a grid, as a `.npy` file and the scene node that
 //! uses it.
 
-use crate::args::BakeArgs;
-use crate::load_scene;
+use crate::cli::args::BakeArgs;
+use crate::cli::load_scene;
+use crate::{io, sdf};
 use anyhow::{Context, Result};
-use implicit_psdr::{io, sdf};
 
 pub(crate) fn bake(args: &BakeArgs) -> Result<()> {
     let (out, name) = (&args.out, &args.shape);
