@@ -202,6 +202,14 @@ fn report_of_the_image_with_computed_references() {
     let result = run(&dir, &args);
     let stdout = assert_success(&result);
     assert!(stdout.contains("truncation"), "{stdout}");
+    // Each estimator's floor, or that the budget ran out before it showed.
+    for line in stdout.lines().filter(|l| l.contains(" to 5%: ")) {
+        assert!(
+            line.contains("bias floor 0.")
+                || line.contains("bias floor not reached within the budget (error "),
+            "{line}"
+        );
+    }
     // stderr is not a terminal here: one-line progress records, the first at once, the last at the
     // end, each with the time so far and to go.
     let stderr = String::from_utf8_lossy(&result.stderr);

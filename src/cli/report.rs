@@ -74,12 +74,11 @@ pub(crate) fn report(args: &ReportArgs) -> Result<()> {
                 None => "not reached".into(),
             };
             let last = points.last().expect("a series has a point");
-            outln!(
-                "  {:24} to 5%: {to5:20} bias floor {:.4} at {} spp",
-                e.name(),
-                last.bias_floor,
-                last.spp
-            )?;
+            let floor = match summary::floor_reached(last) {
+                true => format!("bias floor {:.4} at {} spp", last.bias_floor, last.spp),
+                false => format!("bias floor {}", summary::describe_floor(last)),
+            };
+            outln!("  {:24} to 5%: {to5:20} {floor}", e.name())?;
         }
     }
 

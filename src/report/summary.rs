@@ -42,6 +42,34 @@ pub struct Point {
     pub raw_error: f64,
     /// `√max(blurred_error² − noise², 0)`.
     pub bias_floor: f64,
+    /// One run's seed-to-seed noise at this spp (blurred, relative).
+    pub noise: f64,
+}
+
+/// The share of the bias floor under which a point's noise must be for the floor to count as reached:
+/// with noise at most half the floor, the floor is most of the error (`floor² ≥ 4 · noise²`), so the
+/// estimate is bias rather than a small difference of two noisy numbers.
+pub const FLOOR_NOISE_SHARE: f64 = 0.5;
+
+/// Whether the point's bias floor is reached: its noise is at most [`FLOOR_NOISE_SHARE`] of the
+/// floor. Otherwise the budget ran out before the error stopped falling with the samples, and the
+/// floor is not known (it may be as small as zero, or as large as the error).
+pub fn floor_reached(point: &Point) -> bool {
+    point.noise <= FLOOR_NOISE_SHARE * point.bias_floor
+}
+
+/// The bias floor of a series' last point as the table and the command print it: the floor (`5.3%`),
+/// or that it was not reached within the budget, with the error and noise it saw.
+pub fn describe_floor(point: &Point) -> String {
+    match floor_reached(point) {
+        true => percent(point.bias_floor),
+        false => format!(
+            "not reached within the budget (error {}, noise {} at {} spp)",
+            percent(point.blurred_error),
+            percent(point.noise),
+            point.spp
+        ),
+    }
 }
 
 /// The points of `estimator` in `section`, by increasing spp.
@@ -60,6 +88,7 @@ pub fn points(section: &Section, estimator: Estimator) -> Vec<Point> {
             blurred_error: blurred,
             raw_error: mean(|r| r.raw_error),
             bias_floor: super::bias_floor(blurred, chunk[0].noise),
+            noise: chunk[0].noise,
         });
     }
     points
@@ -179,7 +208,8 @@ pub fn markdown(report: &Report) -> String {
          after a 5×5 box blur, mean of two seeds. A time is one run's at the first spp (1, 2, 4, …) \
          whose error is below the target. The bias floor is the error at the largest spp less the \
          seed-to-seed noise (in quadrature); it cannot be told apart from zero below the reference's \
-         floor.\n",
+         floor, and it counts as reached only when that noise is at most half of it (otherwise the \
+         budget ran out while the error was still mostly noise: \"not reached within the budget\").\n",
         report.budget, report.share
     );
     for section in &report.sections {
@@ -211,7 +241,7 @@ pub fn markdown(report: &Report) -> String {
                 e.name(),
                 times.join(" | "),
                 last.spp,
-                percent(last.bias_floor)
+                describe_floor(last)
             );
         }
         let ratio = |target: f64| {
@@ -292,6 +322,20 @@ mod tests {
         assert!((complete[1].blurred_error - 0.12).abs() < 1e-12);
         // √(0.04² − 0.01²)
         assert!((complete[3].bias_floor - 0.0015f64.sqrt()).abs() < 1e-12);
+        // Noise 0.01 against a floor of 0.039: reached. At 1 spp, an error of 0.3 with the same noise
+        // is a floor too; with noise 0.25 it is not (√(0.3² − 0.25²) = 0.166 < 2 · 0.25).
+        assert!(floor_reached(&complete[3]));
+        assert_eq!(describe_floor(&complete[3]), percent(0.0015f64.sqrt()));
+        let noisy = Point {
+            noise: 0.25,
+            bias_floor: super::super::bias_floor(0.3, 0.25),
+            ..complete[0]
+        };
+        assert!(!floor_reached(&noisy));
+        assert_eq!(
+            describe_floor(&noisy),
+            "not reached within the budget (error 30%, noise 25% at 1 spp)"
+        );
         let near = |t: Option<(f64, u32)>, (s, spp): (f64, u32)| {
             let (a, b) = t.expect("reached");
             assert!((a - s).abs() < 1e-9 && b == spp, "{a} s at {b} spp");
