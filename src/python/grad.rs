@@ -3,9 +3,9 @@
 
 use super::args;
 use super::arrays::{gradient_to_py, image_from_py};
-use super::render::{diff_options, warn};
+use super::render::diff_options;
 use super::scene::PyScene;
-use super::{run_detached, scene_error};
+use super::{run_detached, scene_error, warn};
 use crate::film::Image;
 use crate::integrator::{self, GradientLayout, Loss};
 use pyo3::exceptions::PyValueError;

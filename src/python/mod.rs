@@ -18,8 +18,9 @@ mod render;
 mod scene;
 mod tools;
 
+use crate::integrator::RenderStats;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyRuntimeWarning, PyValueError};
 use pyo3::prelude::*;
 
 // Named after the package that re-exports it, so that its repr and tracebacks read
@@ -77,6 +78,22 @@ pub(crate) fn run_detached<T: Send>(
             .unwrap_or_else(|| "a panic".to_string());
         PyRuntimeError::new_err(format!("internal error (please report): {message}"))
     })
+}
+
+/// Issues what went wrong during a render (rays out of steps, non-finite samples) as Python
+/// warnings, the lines the command-line tool prints.
+pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
+    warn_lines(py, stats.warnings())
+}
+
+/// Issues each line as a Python `RuntimeWarning`.
+pub(crate) fn warn_lines(py: Python<'_>, lines: Vec<String>) -> PyResult<()> {
+    for line in lines {
+        let message = std::ffi::CString::new(line.replace('\0', " "))
+            .expect("no interior NUL after replacing them");
+        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
+    }
+    Ok(())
 }
 
 /// The extension module: the `Scene` class, `render`, `diff`, `fd`, `grad`, `bake`, `optimize`,

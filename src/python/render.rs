@@ -4,13 +4,11 @@
 use super::args;
 use super::arrays::image_to_py;
 use super::scene::PyScene;
-use super::{run_detached, scene_error};
+use super::{run_detached, scene_error, warn};
 use crate::film::Normalization;
-use crate::integrator::{
-    self, BoundaryBudget, DiffOptions, RenderOptions, RenderStats, VelocityField,
-};
+use crate::integrator::{self, BoundaryBudget, DiffOptions, RenderOptions, VelocityField};
 use crate::scene::{GridDirection, Scene};
-use pyo3::exceptions::{PyRuntimeWarning, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Arc;
@@ -52,22 +50,6 @@ pub(crate) fn diff_options(
         },
         velocity,
     })
-}
-
-/// Issues what went wrong during a render (rays out of steps, non-finite samples) as Python
-/// warnings, the lines the command-line tool prints.
-pub(crate) fn warn(py: Python<'_>, stats: &RenderStats) -> PyResult<()> {
-    warn_lines(py, stats.warnings())
-}
-
-/// Issues each line as a Python `RuntimeWarning`.
-pub(crate) fn warn_lines(py: Python<'_>, lines: Vec<String>) -> PyResult<()> {
-    for line in lines {
-        let message = std::ffi::CString::new(line.replace('\0', " "))
-            .expect("no interior NUL after replacing them");
-        PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &message, 1)?;
-    }
-    Ok(())
 }
 
 /// Renders the scene: a float32 array ``(height, width, 3)`` of linear RGB radiance (row 0 the top

@@ -2,8 +2,7 @@
 //! (so that Ray can ship it to other processes).
 
 use super::arrays::{grid_from_py, grid_to_py};
-use super::render::warn_lines;
-use super::scene_error;
+use super::{scene_error, warn_lines};
 use crate::scene::{self, ParameterEntry, Scene, patch};
 use crate::sdf::{self, GridData};
 use numpy::PyArray3;

@@ -3,9 +3,9 @@
 
 use super::args;
 use super::arrays::{grid_to_py, image_to_py};
-use super::render::{render_options, warn};
+use super::render::render_options;
 use super::scene::PyScene;
-use super::{SceneError, run_detached, scene_error};
+use super::{SceneError, run_detached, scene_error, warn};
 use crate::integrator::fd::render_with_differences;
 use crate::sdf;
 use pyo3::exceptions::PyValueError;
