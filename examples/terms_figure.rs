@@ -1,11 +1,13 @@
 //! The picture of the derivative's terms in docs/derivatives.md: for one parameter of a scene, a row of
-//! panels `image | interior | primary | secondary | total | fd`, the derivative panels on one symmetric colour
-//! scale (blue negative, white zero, red positive; the scale of the `fd` panel), written as a PNG.
+//! panels `image | interior | primary | secondary | total | fd`, each under its title, the derivative panels
+//! on one symmetric colour scale (blue negative, white zero, red positive; the scale of the `fd` panel)
+//! shown by a colour bar under each, written as a PNG.
 //!
 //! `cargo run --release --example terms_figure -- SCENE.json PARAM OUT.png [SIZE] [SPP]`
 //! (defaults: 128 px wide, 256 spp; `fd` at 8× the spp with `h = 0.01·max(|P|, 1)`).
 
-use implicit_psdr::film::colormap::{derivative_panel, diverging, side_by_side, srgb_decode};
+use implicit_psdr::film::colormap::{derivative_panel, diverging, srgb_decode};
+use implicit_psdr::film::figure::{Column, compose};
 use implicit_psdr::film::{Image, write_png};
 use implicit_psdr::integrator::RenderOptions;
 use implicit_psdr::integrator::fd::finite_difference;
@@ -74,14 +76,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let (_, scale) = derivative_panel(&fd);
     let total = d.total().remove(0);
-    let row = side_by_side(&[
-        d.image.clone(),
-        panel(&d.interior[0], scale),
-        panel(&d.primary[0], scale),
-        panel(&d.secondary[0], scale),
-        panel(&total, scale),
-        panel(&fd, scale),
-    ]);
+    let mut columns = vec![Column {
+        title: "image".into(),
+        panel: d.image.clone(),
+        scale: None,
+    }];
+    for (title, derivative) in [
+        ("interior", &d.interior[0]),
+        ("primary", &d.primary[0]),
+        ("secondary", &d.secondary[0]),
+        ("total", &total),
+        ("fd", &fd),
+    ] {
+        columns.push(Column {
+            title: title.into(),
+            panel: panel(derivative, scale),
+            scale: Some(scale),
+        });
+    }
+    let row = compose(&columns, true)?;
     write_png(Path::new(out), row.width, row.height, &row.rgb)?;
     println!(
         "{out}: image | interior | primary | secondary | total | fd for {param}; colour scale ±{scale:.3e}"

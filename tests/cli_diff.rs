@@ -2,7 +2,7 @@
 //! they promise, agree with each other on a linear parameter, and fail cleanly (exit code 2, one line on
 //! stderr, no output file) on bad inputs.
 
-use implicit_psdr::film;
+use implicit_psdr::film::{self, figure};
 mod common;
 
 use common::{assert_failure, assert_success, outputs, run};
@@ -33,6 +33,13 @@ fn png_size(path: &Path) -> (u32, u32) {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
     (be(16), be(20))
+}
+
+/// Size of the picture of a 16×16 render with `panels` panels (the image and the derivatives).
+fn figure_size(panels: u32) -> (u32, u32) {
+    let side = 16 * figure::magnification(16);
+    let width = panels * side + (panels - 1) * film::colormap::PANEL_GAP;
+    (width, figure::TITLE_HEIGHT + side + figure::BAR_HEIGHT)
 }
 
 /// `prefix` followed by `R`, `G`, `B`.
@@ -180,8 +187,9 @@ fn diff_writes_the_promised_channels() {
     assert_eq!((w, h), (16, 16));
     let expected = [rgb(""), rgb("d.ball.radius."), rgb("d.light.center.y.")].concat();
     assert_eq!(names, sorted(expected));
-    // The image and two panels, 4 pixels apart.
-    assert_eq!(png_size(&dir.join("diff.png")), (3 * 16 + 2 * 4, 16));
+    // The image and two panels, 4 pixels apart, magnified, under their titles and above the
+    // derivatives' colour bars.
+    assert_eq!(png_size(&dir.join("diff.png")), figure_size(3));
 
     // --terms adds each term under its own name; other file names.
     let out = run(
@@ -211,7 +219,7 @@ fn diff_writes_the_promised_channels() {
     ]
     .concat();
     assert_eq!(names, sorted(expected));
-    assert_eq!(png_size(&dir.join("t.png")), (2 * 16 + 4, 16));
+    assert_eq!(png_size(&dir.join("t.png")), figure_size(2));
 
     // Without boundary samples the derivative is the interior term, and the command says so.
     let out = run(
@@ -308,7 +316,7 @@ fn fd_writes_the_promised_channels() {
     let (w, h, names) = exr_channels(&dir.join("fd.exr"));
     assert_eq!((w, h), (16, 16));
     assert_eq!(names, sorted([rgb(""), rgb("d.ball.radius.")].concat()));
-    assert_eq!(png_size(&dir.join("fd.png")), (2 * 16 + 4, 16));
+    assert_eq!(png_size(&dir.join("fd.png")), figure_size(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -7,7 +7,9 @@
 mod common;
 
 use common::{assert_failure, assert_success, npy_bytes, run};
+use implicit_psdr::film::figure::TITLE_HEIGHT;
 use implicit_psdr::film::{self, Image};
+use implicit_psdr::optimize::pictures::VIEWS_MIN_WIDTH;
 use implicit_psdr::scene;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -187,10 +189,11 @@ fn tiny_run_writes_every_output_and_moves_the_parameter() {
         }
     }
 
-    // Per view a row: target | current, 4 pixels apart.
+    // Per view a row: target | current, 4 pixels apart, magnified; the titles above the first.
+    let side = SIZE * VIEWS_MIN_WIDTH.div_ceil(SIZE);
     assert_eq!(
         png_size(&out.join("views.png")),
-        (2 * SIZE + 4, 2 * SIZE + 4)
+        (2 * side + 4, TITLE_HEIGHT + 2 * side + 4)
     );
     assert_eq!(png_size(&out.join("loss.png")), (640, 400));
     for k in 0..2 {

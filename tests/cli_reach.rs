@@ -74,6 +74,40 @@ fn a_shape_outside_the_view_is_named() {
 }
 
 #[test]
+fn optimize_names_a_shape_outside_every_view() {
+    let dir = workdir("optimize");
+    write_small_scene(&dir, "scene.json", |v| {
+        let mut far = v["shapes"][0].clone();
+        far["name"] = "behind".into();
+        far["sdf"]["center"] = json!([0, 1, 20]);
+        v["shapes"].as_array_mut().unwrap().push(far);
+    });
+    let front = json!({"origin": [0, 3, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45});
+    let back = json!({"origin": [0, 6, 40], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45});
+    let stderr = |views: serde_json::Value| -> Vec<String> {
+        let opt = json!({"scene": "scene.json", "target": {"scene": "scene.json"}, "views": views,
+                         "optimize": {"params": ["ball.radius"]}, "iterations": 1, "spp": 1,
+                         "target_spp": 1});
+        std::fs::write(dir.join("opt.json"), opt.to_string()).unwrap();
+        let out = run(&dir, &["optimize", "opt.json", "--out", "run"]);
+        assert_success(&out);
+        (String::from_utf8_lossy(&out.stderr).lines())
+            .filter(|l| l.starts_with("warning:"))
+            .map(String::from)
+            .collect()
+    };
+    let lines = stderr(json!([front, front]));
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(
+        lines[0].starts_with("warning: shape \"behind\" lies outside every view"),
+        "{lines:?}"
+    );
+    // One view that sees it is enough.
+    assert_eq!(stderr(json!([front, back])), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn the_example_scenes_warn_about_nothing() {
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     for entry in std::fs::read_dir(&scenes).unwrap() {

@@ -132,3 +132,17 @@ def test_a_light_that_lights_nothing_warns(small):
     with pytest.warns(RuntimeWarning, match='emitter "light" lights nothing the camera sees'):
         scene = ip.Scene.from_dict(doc)
     assert ip.render(scene).max() == 0
+
+
+def test_optimize_warns_about_a_shape_outside_every_view(small, tmp_path):
+    _, doc = small("sphere_floor")
+    far = dict(doc["shapes"][0], name="behind")
+    far["sdf"] = dict(far["sdf"], center=[0, 1, 20])
+    doc["shapes"].append(far)
+    path = write_scene(doc, tmp_path)
+    front = {"origin": [0, 3, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45}
+    config = {"scene": path.name, "target": {"scene": path.name}, "views": [front, front],
+              "optimize": {"params": ["ball.radius"]}, "iterations": 1, "spp": 1,
+              "target_spp": 1}
+    with pytest.warns(RuntimeWarning, match='shape "behind" lies outside every view'):
+        ip.optimize(config, base_dir=tmp_path)

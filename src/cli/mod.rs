@@ -31,7 +31,7 @@ mod records;
 mod render;
 mod report;
 
-use crate::film::{Image, colormap};
+use crate::film::{Image, figure};
 use crate::integrator::{BoundaryBudget, DiffOptions, Progress, RenderOptions, RenderStats};
 use crate::scene::settings;
 use crate::{compare, io, scene};
@@ -268,7 +268,7 @@ fn write_derivatives(
     derivatives: &[Image],
 ) -> Result<()> {
     let panels: Vec<&Image> = derivatives.iter().collect();
-    let (picture, scales) = colormap::derivative_picture(image, &panels);
+    let (picture, scales) = figure::derivative_figure(image, params, &panels)?;
     let size = (image.width, image.height);
     io::write_exr_and_png(&paths.0, &paths.1, size, channels, &picture)?;
     for (param, scale) in params.iter().zip(scales) {

@@ -13,6 +13,9 @@ use std::path::Path;
 
 pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
     let cfg = OptimizeConfig::load(&args.config)?;
+    for line in cfg.reach_warnings() {
+        eprintln!("warning: {line}");
+    }
     let out = &args.out;
     let mut bars = Bars {
         bar: None,

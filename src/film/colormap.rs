@@ -1,5 +1,5 @@
-//! A diverging colour map for derivative images (blue negative, white zero, red positive) and the panels
-//! of the `diff` / `fd` PNGs: the image beside one colour-mapped panel per derivative.
+//! A diverging colour map for derivative images (blue negative, white zero, red positive), the panel of
+//! one derivative, and panels side by side; [`super::figure`] titles them and adds the colour bars.
 
 use super::Image;
 
@@ -114,19 +114,6 @@ pub fn side_by_side(panels: &[Image]) -> Image {
         x0 += w + PANEL_GAP as usize;
     }
     out
-}
-
-/// The picture of a derivative command: the image beside one colour-mapped panel per derivative
-/// ([`derivative_panel`]), with each panel's colour scale.
-pub fn derivative_picture(image: &Image, derivatives: &[&Image]) -> (Image, Vec<f32>) {
-    let mut panels = vec![image.clone()];
-    let mut scales = Vec::new();
-    for d in derivatives {
-        let (panel, scale) = derivative_panel(d);
-        panels.push(panel);
-        scales.push(scale);
-    }
-    (side_by_side(&panels), scales)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 pub mod accumulate;
 mod adjoint;
 pub mod colormap;
+pub mod figure;
 mod filter;
 
 pub use accumulate::{Film, Normalization, PixelFilm, SampleSink, SplatFilm, splat_filtered};

@@ -92,6 +92,19 @@ pub struct OptimizeConfig {
 }
 
 impl OptimizeConfig {
+    /// What cannot show in any of the run's views ([`Scene::reach_warnings_in_views`]), one line each:
+    /// shapes outside every view, rectangle emitters that light nothing any view sees. A view whose
+    /// camera is invalid is left to the run's own error.
+    pub fn reach_warnings(&self) -> Vec<String> {
+        let views: Vec<Scene> = (self.views.iter())
+            .filter_map(|v| v.apply(&self.scene).ok())
+            .collect();
+        if views.is_empty() {
+            return Vec::new();
+        }
+        self.scene.reach_warnings_in_views(&views)
+    }
+
     /// Reads and checks `OPT.json` (and the scenes and images it names). Errors are one line naming the
     /// file and the field: `opt.json: optimize.params[0]: no parameter "ball.radus"; did you mean
     /// ball.radius? ...`; an error inside a scene file names that file and its field.

@@ -40,11 +40,17 @@ pub(crate) fn optimize<'py>(
         Err(_) => Err(config.extract::<PathBuf>()?),
     };
     let base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
-    let outcome = run_detached(py, threads, move || {
+    let (cfg, warnings) = run_detached(py, threads, move || {
         let cfg = match &doc {
             Ok(doc) => OptimizeConfig::from_value(doc, &base_dir, Path::new(CONFIG_NAME))?,
             Err(path) => OptimizeConfig::load(path)?,
         };
+        let warnings = cfg.reach_warnings();
+        Ok((cfg, warnings))
+    })?
+    .map_err(scene_error)?;
+    super::warn_lines(py, warnings)?;
+    let outcome = run_detached(py, threads, move || {
         crate::optimize::run(&cfg, out.as_deref(), &mut ())
     })?
     .map_err(scene_error)?;

@@ -10,11 +10,10 @@ use super::Estimator;
 use super::protocol::{Report, Section};
 use super::summary::{estimators, points, section_name};
 use crate::error::{Error, Result};
+use crate::film::figure::register_font;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// The font of the figures' text.
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 /// Size of one panel, pixels.
 pub const PANEL_SIZE: (u32, u32) = (600, 440);
 /// Panels per row.
@@ -29,19 +28,6 @@ fn colour(e: Estimator) -> RGBColor {
         Estimator::CompleteBoundaryDiv4 => RGBColor(0, 40, 100),
         Estimator::Fd => RGBColor(190, 20, 40),
         Estimator::Primal => RGBColor(0, 135, 70),
-    }
-}
-
-/// Registers [`FONT`] as plotters' `sans-serif` once per process.
-fn register_font() -> Result<()> {
-    static RESULT: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    let ok = *RESULT.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(Error::Unsupported("the plot's font does not load".into()))
     }
 }
 

@@ -22,23 +22,41 @@ impl Scene {
     /// the camera's view, rectangle emitters that light nothing the camera sees. Empty for a scene
     /// whose every part can show.
     pub fn reach_warnings(&self) -> Vec<String> {
+        let words = ["the camera's view", "the camera", "the camera"];
+        self.reach_warnings_from(std::slice::from_ref(self), words)
+    }
+
+    /// [`Scene::reach_warnings`] for several views of this scene (e.g. an optimisation's), each
+    /// `views[k]` this scene with another camera: shapes outside every view, rectangle emitters that
+    /// light nothing any view sees.
+    pub fn reach_warnings_in_views(&self, views: &[Scene]) -> Vec<String> {
+        match views {
+            [one] => one.reach_warnings(),
+            _ => self.reach_warnings_from(views, ["every view", "any view", "every camera"]),
+        }
+    }
+
+    /// The warnings of [`Scene::reach_warnings`] over `views` (this scene with other cameras), naming
+    /// them with `[in_view, sees, cameras]`: "the camera's view", "the camera", "the camera" for one.
+    fn reach_warnings_from(&self, views: &[Scene], words: [&str; 3]) -> Vec<String> {
+        let [in_view, sees, cameras] = words;
         let mut lines = Vec::new();
         for shape in &self.shapes {
-            if self.outside_view(shape.bounds) {
+            if views.iter().all(|v| v.outside_view(shape.bounds)) {
                 lines.push(format!(
-                    "shape {:?} lies outside the camera's view (it can still cast shadows and \
-                     reflect light into it)",
+                    "shape {:?} lies outside {in_view} (it can still cast shadows and reflect \
+                     light into it)",
                     shape.name
                 ));
             }
         }
         for named in &self.emitters {
             if let Emitter::Rectangle { center, normal, .. } = &named.emitter
-                && !self.lit_from((center.value(), *normal))
+                && !(views.iter()).any(|v| v.lit_from((center.value(), *normal)))
             {
                 lines.push(format!(
-                    "emitter {:?} lights nothing the camera sees (its emitting side, along its \
-                     normal {:?}, faces away from the camera and from {})",
+                    "emitter {:?} lights nothing {sees} sees (its emitting side, along its normal \
+                     {:?}, faces away from {cameras} and from {})",
                     named.name,
                     normal.to_array(),
                     match self.integrator {
