@@ -41,7 +41,9 @@ fn read_progress(path: &Path) -> Result<Vec<[f64; 3]>, Box<dyn Error>> {
         let cells: Vec<&str> = line.split(',').collect();
         let mut row = [0.0; 3];
         for (value, &c) in row.iter_mut().zip(&columns) {
-            let cell = cells.get(c).ok_or_else(|| format!("row {}: short", k + 2))?;
+            let cell = cells
+                .get(c)
+                .ok_or_else(|| format!("row {}: short", k + 2))?;
             *value = (cell.parse::<f64>())
                 .map_err(|e| format!("{}: row {}: {e}", path.display(), k + 2))?;
         }
@@ -70,7 +72,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let theirs: Vec<String> = (THEIRS.iter())
         .map(|(iou, c)| format!("{iou:.3} / {:.1}", c * 1e3))
         .collect();
-    println!("| Vicini 2022, IoU / Chamfer (×10⁻³) | {} |", theirs.join(" | "));
+    println!(
+        "| Vicini 2022, IoU / Chamfer (×10⁻³) | {} |",
+        theirs.join(" | ")
+    );
     let ours: Vec<String> = (CHECKPOINTS.iter())
         .map(|&t| at(&rows, t).map_or("–".into(), |r| format!("{:.3} / {:.1}", r[1], r[2] * 1e3)))
         .collect();
@@ -109,7 +114,10 @@ fn draw(
             .margin(14)
             .x_label_area_size(40)
             .y_label_area_size(60);
-        let ours = rows.iter().filter(|r| r[0] >= 10.0).map(|r| (r[0], r[column]));
+        let ours = rows
+            .iter()
+            .filter(|r| r[0] >= 10.0)
+            .map(|r| (r[0], r[column]));
         let theirs = (CHECKPOINTS.iter().zip(THEIRS))
             .map(|(&t, (iou, c))| (t, if column == 1 { iou } else { c }));
         // Two charts with different y coordinates: IoU linear, Chamfer logarithmic.
