@@ -30,7 +30,7 @@ use super::options::VelocityField;
 use super::path::{Anchor, Attach, Attached};
 use super::velocity;
 use crate::math::Vec3;
-use crate::scalar::{GridValues, Param, Scalar};
+use crate::scalar::{BlockValues, Param, Scalar};
 use crate::scene::{Scene, Shape};
 
 pub use crate::scalar::Grad;
@@ -64,10 +64,10 @@ pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
     s.visit_params_mut(&mut |_, p: &mut Param| p.slot = p.slot.and_then(window));
     for shape in &mut s.shapes {
         shape.sdf.visit_grid_selections_mut(&mut |g| {
-            if let GridValues::Direction { slot, .. } = g {
+            if let BlockValues::Direction { slot, .. } = g {
                 match window(*slot) {
                     Some(k) => *slot = k,
-                    None => *g = GridValues::Constant,
+                    None => *g = BlockValues::Constant,
                 }
             }
         });

@@ -7,7 +7,7 @@ use super::params::root_prefix;
 use super::{Scene, Shape};
 use crate::declare;
 use crate::error::{Error, Result};
-use crate::scalar::GridValues;
+use crate::scalar::BlockValues;
 use crate::sdf::{GridData, Sdf};
 use std::sync::Arc;
 
@@ -65,7 +65,7 @@ macro_rules! grid_walk {
         fn $walk(
             sdf: &$($m)? Sdf,
             prefix: &str,
-            f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? GridValues, [glam::Vec3; 2]),
+            f: &mut dyn FnMut(&str, &$($m)? Arc<GridData>, &$($m)? BlockValues, [glam::Vec3; 2]),
         ) {
             declare::$tree(sdf, prefix, &mut |prefix, node| {
                 if let Sdf::Grid {
@@ -86,13 +86,13 @@ impl Sdf {
     pub fn grid_values_selected(&self) -> bool {
         let mut any = false;
         walk(self, "", &mut |_, _, s, _| {
-            any |= *s != GridValues::Constant
+            any |= *s != BlockValues::Constant
         });
         any
     }
 
     /// Calls `f` with every grid node's selection (to renumber or clear it).
-    pub fn visit_grid_selections_mut(&mut self, f: &mut dyn FnMut(&mut GridValues)) {
+    pub fn visit_grid_selections_mut(&mut self, f: &mut dyn FnMut(&mut BlockValues)) {
         walk_mut(self, "", &mut |_, _, s, _| f(s));
     }
 }
@@ -230,7 +230,7 @@ impl Scene {
     /// Sets the selection of the grid nodes named in `selection` (`(node, how)`), every other grid's
     /// to constant. Errors: an unknown node, a node given twice, a direction whose length is not the
     /// grid's; on error the scene is unchanged.
-    pub(crate) fn select_grids(&mut self, selection: &[(String, GridValues)]) -> Result<()> {
+    pub(crate) fn select_grids(&mut self, selection: &[(String, BlockValues)]) -> Result<()> {
         let blocks = self.grid_blocks();
         for (k, (node, how)) in selection.iter().enumerate() {
             let Some(block) = blocks.iter().find(|b| &b.node == node) else {
@@ -242,7 +242,7 @@ impl Scene {
                     format!("grid {node:?} is given twice"),
                 ));
             }
-            if let GridValues::Direction { u, .. } = how
+            if let BlockValues::Direction { u, .. } = how
                 && u.len() != block.len()
             {
                 return Err(Error::field(
@@ -262,7 +262,7 @@ impl Scene {
                 *s = selection
                     .iter()
                     .find(|(node, _)| node == n)
-                    .map_or(GridValues::Constant, |(_, how)| how.clone());
+                    .map_or(BlockValues::Constant, |(_, how)| how.clone());
             });
         }
         Ok(())
@@ -286,7 +286,7 @@ impl Scene {
             .shapes
             .iter()
             .cloned()
-            .map(|s| Shape::translated(s.name, s.sdf, s.bsdf, s.translate))
+            .map(|s| Shape::translated(s.name, s.sdf, s.bsdf, s.translate).with_textures(s.textures))
             .collect();
         let mut scene = Scene::new(
             self.camera.clone(),

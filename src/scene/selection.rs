@@ -6,15 +6,15 @@
 //!
 //! Inside an estimator the selection is applied to a copy of the scene ([`Selection::apply`]): each
 //! selected [`crate::Param`] gets its derivative slot and each selected grid its
-//! [`GridValues`], which the scalar type lifts when the scene is evaluated
+//! [`BlockValues`], which the scalar type lifts when the scene is evaluated
 //! ([`crate::scalar::Scalar::lift`]).
 
 use super::{GridDirection, Scene};
 use crate::error::{Error, Result};
-use crate::scalar::GridValues;
+use crate::scalar::BlockValues;
 
 /// Selected grid nodes and how their values are differentiated.
-pub(crate) type GridChoices = Vec<(String, GridValues)>;
+pub(crate) type GridChoices = Vec<(String, BlockValues)>;
 
 /// The parameters and grid values a derivative pass differentiates (module docs). Forward mode: slot
 /// `k` is `names()[k]`, the named parameters first, then one slot per grid direction. Reverse mode
@@ -142,7 +142,7 @@ impl Scene {
             }
             let slot = (first_slot + k) as u32;
             let u = direction.values.clone();
-            selection.push((node, GridValues::Direction { slot, u }));
+            selection.push((node, BlockValues::Direction { slot, u }));
             names.push(block.name.clone());
         }
         Ok((selection, names))

@@ -32,7 +32,7 @@ use crate::integrator::diff::interior;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::{DiffOptions, RenderOptions, require_continuous_filter};
 use crate::integrator::primal::render;
-use crate::scalar::{GridValues, MAX_GRADIENT_ENTRY, Rev};
+use crate::scalar::{BlockValues, MAX_GRADIENT_ENTRY, Rev};
 use crate::scene::{GridBlock, Scene, Selection};
 
 /// Reverse mode's selection: where each selected parameter sits in the gradient, named parameters
@@ -68,13 +68,13 @@ impl GradientLayout {
                 chosen.push((block.clone(), entries));
                 selection.push((
                     node.clone(),
-                    GridValues::Gradient {
+                    BlockValues::Gradient {
                         first: entries as u32,
                     },
                 ));
                 entries += block.len();
             } else {
-                selection.push((node.clone(), GridValues::Constant));
+                selection.push((node.clone(), BlockValues::Constant));
             }
             if entries > MAX_GRADIENT_ENTRY as usize {
                 return Err(Error::field(
