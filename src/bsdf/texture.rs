@@ -134,12 +134,15 @@ impl Volume {
         match &self.selection {
             BlockValues::Constant => value,
             BlockValues::Direction { slot, u } if u.len() == self.values.len() => {
-                let du: f32 = (0..8).map(|j| taps.weight[j] * u[taps.index[j] * k + c]).sum();
+                let du: f32 = (0..8)
+                    .map(|j| taps.weight[j] * u[taps.index[j] * k + c])
+                    .sum();
                 value + S::lift(0.0, Some(*slot)) * du
             }
             BlockValues::Direction { .. } => value,
             BlockValues::Gradient { first } => {
-                let terms = std::array::from_fn::<_, 8, _>(|j| (taps.index[j] * k + c, taps.weight[j]));
+                let terms =
+                    std::array::from_fn::<_, 8, _>(|j| (taps.index[j] * k + c, taps.weight[j]));
                 value + S::block_terms(*first, &terms)
             }
         }
@@ -190,7 +193,9 @@ impl Volume {
             }
         };
         if dims.contains(&0) {
-            return Err(format!("has shape {shape:?}: every dimension must be at least 1"));
+            return Err(format!(
+                "has shape {shape:?}: every dimension must be at least 1"
+            ));
         }
         let (lo, hi) = range;
         if let Some(i) = values.iter().position(|v| !(lo..=hi).contains(v)) {

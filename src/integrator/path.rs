@@ -555,10 +555,14 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
                         // is the emitter's own parameter.
                         let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n).x;
                         let a = emitter.delta_arrival(x, y);
-                        surface.bsdf_eval(x, n, a.wi, wo) * (abs_cos(n, a.wi) / l.pdf) * a.irradiance
+                        surface.bsdf_eval(x, n, a.wi, wo)
+                            * (abs_cos(n, a.wi) / l.pdf)
+                            * a.irradiance
                     } else if emitter.is_infinite() {
                         let w = Vec3::<S>::constant(l.p);
-                        surface.bsdf_eval(x, n, w, wo) * (abs_cos(n, w) / l.pdf) * emitter.emitted(x, -w, -w)
+                        surface.bsdf_eval(x, n, w, wo)
+                            * (abs_cos(n, w) / l.pdf)
+                            * emitter.emitted(x, -w, -w)
                     } else {
                         let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n);
                         let wl = direction(x, y.x);

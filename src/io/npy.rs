@@ -228,7 +228,11 @@ pub fn write_npy_array(path: &Path, shape: &[usize], values: &[f32]) -> Result<(
     if shape.iter().product::<usize>() != values.len() {
         return Err(Error::file(
             path,
-            format!("shape {shape:?} needs {} values, got {}", shape.iter().product::<usize>(), values.len()),
+            format!(
+                "shape {shape:?} needs {} values, got {}",
+                shape.iter().product::<usize>(),
+                values.len()
+            ),
         ));
     }
     write_bytes(path, &encode_array(shape, values))

@@ -676,7 +676,9 @@ fn material_textures(
     read: Vec<(usize, &'static str, Volume)>,
 ) -> Vec<MaterialTexture> {
     let mut prefixes = Vec::new();
-    declare::walk(bsdf, shape, &mut |prefix, _| prefixes.push(prefix.to_string()));
+    declare::walk(bsdf, shape, &mut |prefix, _| {
+        prefixes.push(prefix.to_string())
+    });
     read.into_iter()
         .map(|(node, key, volume)| MaterialTexture {
             node,

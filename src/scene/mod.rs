@@ -1,7 +1,7 @@
 //! The scene in `f32` (with a [`crate::Param`] for every differentiable number) and ray queries against it.
 //! Parsing lives in [`load`]; rendering types never see serde.
 
-mod grids;
+mod blocks;
 mod integrator_kind;
 pub(crate) mod json;
 mod params;
@@ -10,7 +10,8 @@ mod reach;
 mod selection;
 pub mod settings;
 
-pub use grids::{GridBlock, GridDirection, ParameterEntry};
+pub(crate) use blocks::visit_selections_mut;
+pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 pub use selection::Selection;
@@ -102,7 +103,13 @@ impl Shape {
     /// The material's `f(wi, wo)` at world point `x` ([`Bsdf::eval_at`]): its textured fields read at
     /// [`Shape::material_point`] of `x` (not computed for a material without texture).
     #[inline]
-    pub fn bsdf_eval<S: Scalar>(&self, x: Vec3<S>, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
+    pub fn bsdf_eval<S: Scalar>(
+        &self,
+        x: Vec3<S>,
+        n: Vec3<S>,
+        wi: Vec3<S>,
+        wo: Vec3<S>,
+    ) -> Vec3<S> {
         if self.textures.is_empty() {
             return self.bsdf.eval(n, wi, wo);
         }

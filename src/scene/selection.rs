@@ -9,7 +9,7 @@
 //! [`BlockValues`], which the scalar type lifts when the scene is evaluated
 //! ([`crate::scalar::Scalar::lift`]).
 
-use super::{GridDirection, Scene};
+use super::{BlockKind, GridDirection, ParamBlock, Scene};
 use crate::error::{Error, Result};
 use crate::scalar::BlockValues;
 
@@ -112,7 +112,7 @@ impl Scene {
         first_slot: usize,
         directions: &[GridDirection],
     ) -> Result<(GridChoices, Vec<String>)> {
-        let blocks = self.grid_blocks();
+        let blocks = self.blocks();
         let mut selection: GridChoices = Vec::new();
         let mut names = Vec::new();
         for (k, direction) in directions.iter().enumerate() {
@@ -130,13 +130,21 @@ impl Scene {
                 ));
             }
             if direction.shape != block.shape {
-                let [nz, ny, nx] = direction.shape;
+                let given = ParamBlock {
+                    shape: direction.shape.clone(),
+                    ..block.clone()
+                };
+                let what = match block.kind {
+                    BlockKind::Grid => "grid",
+                    BlockKind::Volume => "volume texture",
+                };
                 return Err(Error::file(
                     &direction.source,
                     format!(
-                        "shape [{nz}, {ny}, {nx}], but grid {node:?} has shape {:?} (a direction \
-                         has one value per grid value)",
-                        block.shape
+                        "shape {}, but {what} {node:?} has shape {} (a direction has one value per \
+                         value of the block)",
+                        given.shape_text(),
+                        block.shape_text()
                     ),
                 ));
             }

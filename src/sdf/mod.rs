@@ -60,7 +60,7 @@ primitive::primitives! {
 use crate::declare::{Family, Kind};
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
-use crate::scalar::{Dual2Vec3, DualVec3, BlockValues, Param, Param3, Scalar};
+use crate::scalar::{BlockValues, Dual2Vec3, DualVec3, Param, Param3, Scalar};
 use std::sync::Arc;
 
 /// Values of a grid SDF: `nx · ny · nz` samples, x fastest (the layout of a C-order `.npy` of shape

@@ -160,7 +160,9 @@ pub fn camera_side(
         let Some(bs) = surface.bsdf_sample(x, n, wi, sampler.next_2d()) else {
             return;
         };
-        let f: glam::Vec3 = surface.bsdf_eval::<f32>(x.into(), n.into(), wi.into(), bs.wi.into()).into();
+        let f: glam::Vec3 = surface
+            .bsdf_eval::<f32>(x.into(), n.into(), wi.into(), bs.wi.into())
+            .into();
         beta *= f * (n.dot(bs.wi).abs() / bs.pdf);
         if beta == glam::Vec3::ZERO || !beta.is_finite() {
             return;
