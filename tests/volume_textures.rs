@@ -526,3 +526,60 @@ fn the_command_line_names_the_block() {
     );
     assert_failure(&out, "bad.npy");
 }
+
+/// A tiny `optimize` run fits a ball's albedo texture to images of a painted ball: the loss falls to a
+/// fraction of its start, and result.json names the fitted texels' `.npy` (of the texture's shape, in
+/// range) in the texture's `file`.
+#[test]
+fn optimize_recovers_an_albedo_texture() {
+    let dir = workdir("optimize");
+    let corner = |i: usize| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32];
+    let target: Vec<f32> = (0..8)
+        .flat_map(|i| corner(i).map(|c| 0.15 + 0.7 * c))
+        .collect();
+    std::fs::write(dir.join("target.npy"), npy_f32(&[2, 2, 2, 3], &target)).unwrap();
+    std::fs::write(dir.join("start.npy"), npy_f32(&[2, 2, 2, 3], &[0.5; 24])).unwrap();
+    for (name, file) in [("target", "target.npy"), ("start", "start.npy")] {
+        let mut doc = scene_doc(
+            json!({"type": "diffuse", "albedo": volume("paint", file)}),
+            json!({"type": "direct"}),
+        );
+        doc["emitters"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"name": "sky", "type": "constant", "radiance": [0.5, 0.5, 0.5]}));
+        std::fs::write(dir.join(format!("{name}.json")), doc.to_string()).unwrap();
+    }
+    let opt = json!({
+        "scene": "start.json",
+        "target": {"scene": "target.json"},
+        "views": {"orbit": {"count": 3, "radius": 4, "height": 1.5, "fov_y": 40}},
+        "optimize": {"grids": ["paint"]},
+        "iterations": 25,
+        "spp": 4,
+        "learning_rate": {"grids": 0.05, "params": 0.01},
+        "target_spp": 32,
+        "seed": 0
+    });
+    std::fs::write(dir.join("opt.json"), opt.to_string()).unwrap();
+    assert_success(&run(&dir, &["optimize", "opt.json", "--out", "out"]));
+    let progress = std::fs::read_to_string(dir.join("out/progress.csv")).unwrap();
+    let mut lines = progress.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "loss").unwrap();
+    let losses: Vec<f64> = lines
+        .map(|l| l.split(',').nth(column).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(losses.len(), 25);
+    let (first, last) = (losses[0], losses[losses.len() - 1]);
+    assert!(last < 0.25 * first, "loss {first} -> {last}");
+    let result: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/result.json")).unwrap())
+            .unwrap();
+    assert_eq!(result["shapes"][0]["bsdf"]["albedo"]["file"], "paint.npy");
+    let fitted = implicit_psdr::io::read_npy_array(&dir.join("out/paint.npy")).unwrap();
+    assert_eq!(fitted.shape, [2, 2, 2, 3]);
+    assert!(fitted.values.iter().all(|v| (0.0..=1.0).contains(v)));
+    // The fitted scene loads (its texture in range) from the output folder.
+    scene::load(&dir.join("out/result.json")).unwrap();
+}
