@@ -527,8 +527,8 @@ fn the_command_line_names_the_block() {
     assert_failure(&out, "bad.npy");
 }
 
-/// A tiny `optimize` run fits a ball's albedo texture to images of a painted ball: the loss falls to a
-/// fraction of its start, and result.json names the fitted texels' `.npy` (of the texture's shape, in
+/// A tiny `optimize` run fits a ball's albedo texture to images of a painted ball: the texels end
+/// near the truth (a mean error under a third of the start's), and result.json names the fitted texels' `.npy` (of the texture's shape, in
 /// range) in the texture's `file`.
 #[test]
 fn optimize_recovers_an_albedo_texture() {
@@ -572,7 +572,9 @@ fn optimize_recovers_an_albedo_texture() {
         .collect();
     assert_eq!(losses.len(), 25);
     let (first, last) = (losses[0], losses[losses.len() - 1]);
-    assert!(last < 0.25 * first, "loss {first} -> {last}");
+    // The loss keeps the noise of 4-spp renders against 32-spp targets: it falls, but the texels
+    // tell how well the texture is recovered.
+    assert!(last < 0.8 * first, "loss {first} -> {last}");
     let result: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/result.json")).unwrap())
             .unwrap();
@@ -580,6 +582,16 @@ fn optimize_recovers_an_albedo_texture() {
     let fitted = implicit_psdr::io::read_npy_array(&dir.join("out/paint.npy")).unwrap();
     assert_eq!(fitted.shape, [2, 2, 2, 3]);
     assert!(fitted.values.iter().all(|v| (0.0..=1.0).contains(v)));
+    // Every texel starts 0.35 from the truth (0.5 against 0.15 or 0.85).
+    let errors: Vec<f32> = (fitted.values.iter().zip(&target))
+        .map(|(a, b)| (a - b).abs())
+        .collect();
+    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+    let worst = errors.iter().copied().fold(0.0, f32::max);
+    assert!(
+        mean < 0.1 && worst < 0.25,
+        "texel error: mean {mean}, worst {worst}"
+    );
     // The fitted scene loads (its texture in range) from the output folder.
     scene::load(&dir.join("out/result.json")).unwrap();
 }
