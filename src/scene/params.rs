@@ -125,6 +125,8 @@ impl Scene {
     ///   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
     ///   intersection and difference have no fields; a grid has `level`. A grid's samples are not listed
     ///   here one by one: they are one block `<prefix>.values` ([`Scene::grid_blocks`]).
+    /// - A material field given by a volume texture has no parameters of its own: the texture's texels
+    ///   are one block `<texture name>.values` ([`Scene::blocks`]).
     /// - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
     ///   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
     ///   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`
