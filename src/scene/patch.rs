@@ -263,7 +263,11 @@ impl Walk<'_> {
         for field in kind.fields {
             let key = field.key;
             // A field given by a volume texture: its file, like a grid's (its texels are a block).
-            if let Some(Value::Object(texture)) = o.get_mut(key) {
+            let number = matches!(
+                field.value,
+                declare::Value::Number { .. } | declare::Value::Vector { .. }
+            );
+            if let (true, Some(Value::Object(texture))) = (number, o.get_mut(key)) {
                 let at = format!("{path}.{key}");
                 let name = string(texture, "name", &at)?;
                 let file = string(texture, "file", &at)?;
