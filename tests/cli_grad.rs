@@ -380,7 +380,7 @@ fn diff_grid_direction_writes_what_the_library_computes() {
     let scene = scene::load(&dir.join("scene.json")).unwrap();
     let along = GridDirection {
         node: "blob".into(),
-        shape: SHAPE,
+        shape: SHAPE.to_vec(),
         values: Arc::new(u),
         source: "u".into(),
     };

@@ -109,7 +109,7 @@ fn terms(g: &Gradient) -> [(&'static str, &Vec<f64>); 3] {
 fn along(block: &GridBlock, u: Arc<Vec<f32>>) -> GridDirection {
     GridDirection {
         node: block.node.clone(),
-        shape: block.shape,
+        shape: block.shape.clone(),
         values: u,
         source: "u".into(),
     }
@@ -610,7 +610,7 @@ fn loss_gradient_matches_finite_differences() {
     let params = names(&["ball.radius", "light.center.x", "blob.albedo.g"]);
     let layout = GradientLayout::select(&scene, &params, std::slice::from_ref(&node)).unwrap();
     let (block, first) = layout.grids[0].clone();
-    let u = smooth_direction(block.shape, 77);
+    let u = smooth_direction(block.shape.clone().try_into().unwrap(), 77);
     let seeds: Vec<u64> = (0..12).map(|s| 100 + 2 * s).collect();
     let options = options(spp, 0, 4, 8, Normalization::default());
     let gradients: Vec<Vec<f64>> = seeds

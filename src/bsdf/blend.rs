@@ -6,7 +6,7 @@
 //! At `w = 0` (or 1) every value is the child's bit for bit: `1 · x + 0 · y = x` in floating point,
 //! the rescaled random number is the original, and the sampled density is the child's own.
 
-use super::{BLANK, Bsdf, BsdfSample};
+use super::{At, BLANK, Bsdf, BsdfSample};
 use crate::declare::{Field, Kind, Rule, Value, on};
 use crate::math::Vec3;
 use crate::scalar::{Param, Scalar};
@@ -27,27 +27,61 @@ impl Blend {
     /// `f(wi, wo)`, generic.
     #[inline]
     pub fn eval<S: Scalar>(&self, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
-        let w = self.weight.get::<S>();
-        let a = self.bsdfs[0].eval(n, wi, wo);
-        let b = self.bsdfs[1].eval(n, wi, wo);
+        self.eval_node(&At::none(), 0, n, wi, wo)
+    }
+
+    /// The material nodes of the two children when this blend is node `node` (depth-first).
+    #[inline]
+    fn children(&self, node: usize) -> [usize; 2] {
+        [node + 1, node + 1 + self.bsdfs[0].node_count()]
+    }
+
+    /// [`Blend::eval`] of material node `node` with its textured fields read at `at`.
+    #[inline]
+    pub(crate) fn eval_node<S: Scalar>(
+        &self,
+        at: &At<S>,
+        node: usize,
+        n: Vec3<S>,
+        wi: Vec3<S>,
+        wo: Vec3<S>,
+    ) -> Vec3<S> {
+        let w = at.number(node, "weight", &self.weight);
+        let [na, nb] = self.children(node);
+        let a = self.bsdfs[0].eval_node(at, na, n, wi, wo);
+        let b = self.bsdfs[1].eval_node(at, nb, n, wi, wo);
         a * (S::one() - w) + b * w
     }
 
     /// Picks a child with `u.x`, samples it with the rescaled `u`, and returns the mixture's density.
     #[inline]
     pub fn sample(&self, n: glam::Vec3, wo: glam::Vec3, u: glam::Vec2) -> Option<BsdfSample> {
-        let w = self.weight.value;
+        self.sample_node(&At::none(), 0, n, wo, u)
+    }
+
+    /// [`Blend::sample`] of material node `node` with its textured fields read at `at`.
+    #[inline]
+    pub(crate) fn sample_node(
+        &self,
+        at: &At<f32>,
+        node: usize,
+        n: glam::Vec3,
+        wo: glam::Vec3,
+        u: glam::Vec2,
+    ) -> Option<BsdfSample> {
+        let w = at.value(node, "weight", &self.weight);
+        let [na, nb] = self.children(node);
         let (chosen, other, w_chosen, w_other, ux) = if u.x < 1.0 - w {
             let ux = u.x / (1.0 - w);
-            (&self.bsdfs[0], &self.bsdfs[1], 1.0 - w, w, ux)
+            ((&self.bsdfs[0], na), (&self.bsdfs[1], nb), 1.0 - w, w, ux)
         } else {
             let ux = (u.x - (1.0 - w)) / w;
-            (&self.bsdfs[1], &self.bsdfs[0], w, 1.0 - w, ux)
+            ((&self.bsdfs[1], nb), (&self.bsdfs[0], na), w, 1.0 - w, ux)
         };
         let u = glam::Vec2::new(ux.min(ONE_MINUS_EPSILON), u.y);
-        let s = chosen.sample(n, wo, u)?;
+        let s = chosen.0.sample_node(at, chosen.1, n, wo, u)?;
         let other_pdf = if w_other > 0.0 {
-            other.pdf(n, wo, s.wi)
+            other.0.pdf_node(at, other.1, n, wo, s.wi)
         } else {
             0.0
         };
@@ -60,8 +94,23 @@ impl Blend {
     /// `(1 − w) p_A + w p_B`.
     #[inline]
     pub fn pdf(&self, n: glam::Vec3, wo: glam::Vec3, wi: glam::Vec3) -> f32 {
-        let w = self.weight.value;
-        (1.0 - w) * self.bsdfs[0].pdf(n, wo, wi) + w * self.bsdfs[1].pdf(n, wo, wi)
+        self.pdf_node(&At::none(), 0, n, wo, wi)
+    }
+
+    /// [`Blend::pdf`] of material node `node` with its textured fields read at `at`.
+    #[inline]
+    pub(crate) fn pdf_node(
+        &self,
+        at: &At<f32>,
+        node: usize,
+        n: glam::Vec3,
+        wo: glam::Vec3,
+        wi: glam::Vec3,
+    ) -> f32 {
+        let w = at.value(node, "weight", &self.weight);
+        let [na, nb] = self.children(node);
+        (1.0 - w) * self.bsdfs[0].pdf_node(at, na, n, wo, wi)
+            + w * self.bsdfs[1].pdf_node(at, nb, n, wo, wi)
     }
 }
 

@@ -11,9 +11,15 @@ use std::f32::consts::FRAC_1_PI;
 /// `albedo / π` when `wi` and `wo` lie on the same side of the surface, zero otherwise.
 #[inline]
 pub fn eval<S: Scalar>(albedo: &Param3, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
+    eval_with(albedo.get::<S>(), n, wi, wo)
+}
+
+/// [`eval`] with the albedo given as a value (a constant's or a texture's).
+#[inline]
+pub fn eval_with<S: Scalar>(albedo: Vec3<S>, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
     let same_side = n.dot(wi).primal() * n.dot(wo).primal() > 0.0;
     if same_side {
-        albedo.get::<S>() * S::constant(FRAC_1_PI)
+        albedo * S::constant(FRAC_1_PI)
     } else {
         Vec3::zero()
     }

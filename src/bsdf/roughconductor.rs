@@ -21,7 +21,7 @@
 //! of its own to the integrand.
 
 use super::microfacet::{d, g1, sample_visible};
-use super::{BLANK, Bsdf, BsdfSample, fresnel};
+use super::{At, BLANK, Bsdf, BsdfSample, fresnel};
 use crate::declare::{Components, Field, Kind, Rule, on};
 use crate::math::{Frame, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
@@ -46,12 +46,25 @@ impl RoughConductor {
     /// `f(wi, wo)`, generic.
     #[inline]
     pub fn eval<S: Scalar>(&self, n: Vec3<S>, wi: Vec3<S>, wo: Vec3<S>) -> Vec3<S> {
+        self.eval_node(&At::none(), 0, n, wi, wo)
+    }
+
+    /// [`RoughConductor::eval`] of material node `node` with its textured fields read at `at`.
+    #[inline]
+    pub(crate) fn eval_node<S: Scalar>(
+        &self,
+        at: &At<S>,
+        node: usize,
+        n: Vec3<S>,
+        wi: Vec3<S>,
+        wo: Vec3<S>,
+    ) -> Vec3<S> {
         let (ci, co) = (n.dot(wi), n.dot(wo));
         if !(ci.primal() > 0.0 && co.primal() > 0.0) {
             return Vec3::zero();
         }
         let h = (wi + wo).normalize_or_zero();
-        let alpha = self.alpha.get::<S>();
+        let alpha = at.number(node, "alpha", &self.alpha);
         let dh = d(alpha, n.dot(h), n.cross(h).length_squared());
         if dh.primal() == 0.0 {
             return Vec3::zero();
@@ -66,7 +79,7 @@ impl RoughConductor {
             fresnel::conductor(cos_h, eta.y, k.y),
             fresnel::conductor(cos_h, eta.z, k.z),
         );
-        f * self.specular_reflectance.get::<S>() * common
+        f * at.color(node, "specular_reflectance", &self.specular_reflectance) * common
     }
 
     /// Reflects `wo` about a visible microfacet normal; `None` from behind, for a reflection below the
@@ -75,6 +88,19 @@ impl RoughConductor {
     // Negated comparisons, so that a NaN fails each test.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn sample(&self, n: glam::Vec3, wo: glam::Vec3, u: glam::Vec2) -> Option<BsdfSample> {
+        self.sample_with(self.alpha.value, n, wo, u)
+    }
+
+    /// [`RoughConductor::sample`] with roughness `alpha` (a texture's value at the point).
+    #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub fn sample_with(
+        &self,
+        alpha: f32,
+        n: glam::Vec3,
+        wo: glam::Vec3,
+        u: glam::Vec2,
+    ) -> Option<BsdfSample> {
         if !(n.dot(wo) > 0.0) {
             return None;
         }
@@ -83,7 +109,6 @@ impl RoughConductor {
         if !(v.z > 0.0) {
             return None;
         }
-        let alpha = self.alpha.value;
         let m = sample_visible(alpha, v, u);
         let vm = v.dot(m);
         if !(vm > 0.0) {
@@ -107,6 +132,12 @@ impl RoughConductor {
     /// Density of [`RoughConductor::sample`]: `D(h) G1(wo, h) / (4 cos θo)` on the front side.
     #[inline]
     pub fn pdf(&self, n: glam::Vec3, wo: glam::Vec3, wi: glam::Vec3) -> f32 {
+        self.pdf_with(self.alpha.value, n, wo, wi)
+    }
+
+    /// [`RoughConductor::pdf`] with roughness `alpha`.
+    #[inline]
+    pub fn pdf_with(&self, alpha: f32, n: glam::Vec3, wo: glam::Vec3, wi: glam::Vec3) -> f32 {
         let (ci, co) = (n.dot(wi), n.dot(wo));
         if !(ci > 0.0 && co > 0.0) {
             return 0.0;
@@ -116,7 +147,6 @@ impl RoughConductor {
         if !(ih > 0.0 && oh > 0.0) {
             return 0.0;
         }
-        let alpha = self.alpha.value;
         d(alpha, n.dot(h), n.cross(h).length_squared())
             * g1(alpha, co, n.cross(wo).length_squared(), oh)
             / (4.0 * co)

@@ -40,15 +40,21 @@ pub(crate) fn diff(args: &DiffArgs) -> Result<()> {
 }
 
 /// The forward-mode directions `(node, U.npy)` of `diff --grid-direction`, read. Errors: an
-/// unreadable U (a U of another shape than its grid is reported when selected, naming its file).
+/// unreadable U or one with a value that is not finite (a U of another shape than its block is
+/// reported when selected, naming its file).
 fn read_directions(directions: &[(String, PathBuf)]) -> Result<Vec<GridDirection>, crate::Error> {
     let mut read = Vec::new();
     for (node, file) in directions {
-        let u = io::read_npy(file)?;
-        let [nx, ny, nz] = u.dims;
+        let u = io::read_npy_array(file)?;
+        if let Some(i) = u.values.iter().position(|v| !v.is_finite()) {
+            return Err(crate::Error::file(
+                file,
+                format!("value {i} is not finite ({})", u.values[i]),
+            ));
+        }
         read.push(GridDirection {
             node: node.clone(),
-            shape: [nz, ny, nx],
+            shape: u.shape,
             values: Arc::new(u.values),
             source: file.display().to_string(),
         });

@@ -7,8 +7,7 @@ use crate::film::Image;
 use crate::integrator::diff::terms_note;
 use crate::integrator::{GradientLayout, loss_gradient};
 use crate::io::{self, Writer, file_message, file_name};
-use crate::scene::GridBlock;
-use crate::sdf::GridData;
+use crate::scene::{BlockKind, GridBlock};
 use anyhow::{Result, bail};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -137,14 +136,20 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     let json = gradient_json(result.loss, spp, seed, &params, &grid_files)?;
     let mut files: Vec<(PathBuf, Writer)> = Vec::new();
     for ((block, first), path) in layout.grids.iter().zip(&grid_paths) {
-        let values = gradient[*first..first + block.len()]
+        let values: Vec<f32> = gradient[*first..first + block.len()]
             .iter()
             .map(|&g| g as f32)
             .collect();
-        let [nz, ny, nx] = block.shape;
         let what = format!("the gradient of {}", block.name);
-        let grid = GridData::new([nx, ny, nz], values, &what)?;
-        let writer: Writer = Box::new(move |tmp| io::write_npy(tmp, &grid).map_err(file_message));
+        if let Some(i) = values.iter().position(|v: &f32| !v.is_finite()) {
+            bail!(
+                "{what}: value {i} is not finite ({}): not written",
+                values[i]
+            );
+        }
+        let shape = block.shape.clone();
+        let writer: Writer =
+            Box::new(move |tmp| io::write_npy_array(tmp, &shape, &values).map_err(file_message));
         files.push((path.clone(), writer));
     }
     files.push((out.clone(), io::bytes_writer(json)));
@@ -156,10 +161,16 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     }
     if !layout.grids.is_empty() {
         let values: usize = layout.grids.iter().map(|(b, _)| b.len()).sum();
-        wrt.push(format!(
-            "{values} values of {}",
-            count(layout.grids.len(), "grid")
-        ));
+        let kinds = |kind: BlockKind| layout.grids.iter().filter(|(b, _)| b.kind == kind).count();
+        let (grids, volumes) = (kinds(BlockKind::Grid), kinds(BlockKind::Volume));
+        let mut of = Vec::new();
+        if grids > 0 {
+            of.push(count(grids, "grid"));
+        }
+        if volumes > 0 {
+            of.push(count(volumes, "volume texture"));
+        }
+        wrt.push(format!("{values} values of {}", join_and(&of)));
     }
     let written: Vec<String> = std::iter::once(out)
         .chain(&grid_paths)

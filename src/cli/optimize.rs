@@ -65,8 +65,13 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         }
     }
     for node in &cfg.settings.grids {
+        let what = if cfg.scene.texture_range(node).is_some() {
+            "every texel of the volume texture"
+        } else {
+            "every value of the grid"
+        };
         outln!(
-            "  {node}: every value of the grid, in {}",
+            "  {node}: {what}, in {}",
             out.join(format!("{node}.npy")).display()
         )?;
     }

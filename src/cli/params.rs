@@ -11,7 +11,9 @@ pub(crate) fn params(scene: &Path) -> Result<()> {
 }
 
 /// What `params` prints: every parameter as `name value`, and each grid node's values once, as
-/// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end).
+/// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end), and each
+/// volume texture's texels as `NAME.values [nz, ny, nx, 3]` (or `[nz, ny, nx]`) after its shape's
+/// parameters.
 fn parameter_list(scene: &Scene) -> String {
     let mut out = String::new();
     for entry in scene.parameter_entries() {
@@ -21,12 +23,9 @@ fn parameter_list(scene: &Scene) -> String {
                 let node = &b.node;
                 writeln!(
                     out,
-                    "{} [{}, {}, {}] ({} values; select with --grid {node} or --grid-direction \
-                     {node}=U.npy)",
+                    "{} {} ({} values; select with --grid {node} or --grid-direction {node}=U.npy)",
                     b.name,
-                    b.shape[0],
-                    b.shape[1],
-                    b.shape[2],
+                    b.shape_text(),
                     b.len()
                 )
             }

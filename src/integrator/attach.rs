@@ -30,7 +30,7 @@ use super::options::VelocityField;
 use super::path::{Anchor, Attach, Attached};
 use super::velocity;
 use crate::math::Vec3;
-use crate::scalar::{GridValues, Param, Scalar};
+use crate::scalar::{BlockValues, Param, Scalar};
 use crate::scene::{Scene, Shape};
 
 pub use crate::scalar::Grad;
@@ -63,11 +63,11 @@ pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
     let mut s = scene.clone();
     s.visit_params_mut(&mut |_, p: &mut Param| p.slot = p.slot.and_then(window));
     for shape in &mut s.shapes {
-        shape.sdf.visit_grid_selections_mut(&mut |g| {
-            if let GridValues::Direction { slot, .. } = g {
+        crate::scene::visit_selections_mut(shape, &mut |_, g| {
+            if let BlockValues::Direction { slot, .. } = g {
                 match window(*slot) {
                     Some(k) => *slot = k,
-                    None => *g = GridValues::Constant,
+                    None => *g = BlockValues::Constant,
                 }
             }
         });

@@ -210,9 +210,9 @@ pub fn sample_light(
         return sample_delta_light(scene, from, shape, k, p, n, wo, counters);
     }
     let es = emitter.sample_li(p, u)?;
-    let bsdf = &scene.shapes[shape].bsdf;
-    let bsdf_pdf = bsdf.pdf(n, wo, es.wi);
-    let f = bsdf.eval::<f32>(n.into(), es.wi.into(), wo.into());
+    let surface = &scene.shapes[shape];
+    let bsdf_pdf = surface.bsdf_pdf(p, n, wo, es.wi);
+    let f = surface.bsdf_eval::<f32>(p.into(), n.into(), es.wi.into(), wo.into());
     if f.x <= 0.0 && f.y <= 0.0 && f.z <= 0.0 {
         return None;
     }
@@ -269,9 +269,7 @@ fn sample_delta_light(
     counters: &mut TraceCounters,
 ) -> Option<LightVertex> {
     let es = scene.emitters[k].emitter.sample_delta_li(p)?;
-    let f = scene.shapes[shape]
-        .bsdf
-        .eval::<f32>(n.into(), es.wi.into(), wo.into());
+    let f = scene.shapes[shape].bsdf_eval::<f32>(p.into(), n.into(), es.wi.into(), wo.into());
     if f.x <= 0.0 && f.y <= 0.0 && f.z <= 0.0 {
         return None;
     }
@@ -426,7 +424,7 @@ pub(crate) fn trace_path_after(
                 {
                     record.lights.push(lv);
                 }
-                let Some(bs) = scene.shapes[s].bsdf.sample(h.n, wo, u_bsdf) else {
+                let Some(bs) = scene.shapes[s].bsdf_sample(h.p, h.n, wo, u_bsdf) else {
                     return;
                 };
                 bsdf_pdf = Some(bs.pdf);
@@ -519,8 +517,8 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
         match v.kind {
             VertexKind::Environment(e) => {
                 let w = Vec3::<S>::constant(v.p);
-                if let Some((_, xn, wo, s)) = scatter {
-                    let f = scene.shapes[s].bsdf.eval(xn, w, wo);
+                if let Some((xp, xn, wo, s)) = scatter {
+                    let f = scene.shapes[s].bsdf_eval(xp, xn, w, wo);
                     beta = beta * f * (abs_cos(xn, w) / v.pdf);
                 }
                 let le = scene.emitters[e].emitter.emitted(prev_p, -w, -w);
@@ -538,7 +536,7 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
                 }
                 let (x, n) = (a.x, a.n);
                 if let Some((xp, xn, wo, s)) = scatter {
-                    let f = scene.shapes[s].bsdf.eval(xn, direction(xp, x), wo);
+                    let f = scene.shapes[s].bsdf_eval(xp, xn, direction(xp, x), wo);
                     beta = beta * f * (geometry_term(xp, xn, x, n) / v.pdf);
                 }
                 beta = beta * a.j;
@@ -551,20 +549,24 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
                 let s = e;
                 while let Some(l) = lights.next_if(|l| l.from == i) {
                     let emitter = &scene.emitters[l.emitter].emitter;
-                    let bsdf = &scene.shapes[s].bsdf;
+                    let surface = &scene.shapes[s];
                     let contrib = if emitter.is_delta() {
                         // A point light's position is attached (it may move); the sun's direction
                         // is the emitter's own parameter.
                         let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n).x;
                         let a = emitter.delta_arrival(x, y);
-                        bsdf.eval(n, a.wi, wo) * (abs_cos(n, a.wi) / l.pdf) * a.irradiance
+                        surface.bsdf_eval(x, n, a.wi, wo)
+                            * (abs_cos(n, a.wi) / l.pdf)
+                            * a.irradiance
                     } else if emitter.is_infinite() {
                         let w = Vec3::<S>::constant(l.p);
-                        bsdf.eval(n, w, wo) * (abs_cos(n, w) / l.pdf) * emitter.emitted(x, -w, -w)
+                        surface.bsdf_eval(x, n, w, wo)
+                            * (abs_cos(n, w) / l.pdf)
+                            * emitter.emitted(x, -w, -w)
                     } else {
                         let y = attach.attach(Anchor::Emitter(l.emitter), l.p, l.n);
                         let wl = direction(x, y.x);
-                        bsdf.eval(n, wl, wo)
+                        surface.bsdf_eval(x, n, wl, wo)
                             * (geometry_term(x, n, y.x, y.n) / l.pdf)
                             * emitter.emitted(y.x, y.n, -wl)
                             * y.j

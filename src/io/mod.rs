@@ -17,5 +17,5 @@ pub use files::{
     file_name, write_all_or_nothing, write_exr_and_png,
 };
 pub use mesh::{MESH_EXTENSIONS, write_mesh};
-pub use npy::{read_npy, write_npy};
+pub use npy::{NpyArray, read_npy, read_npy_array, write_npy, write_npy_array};
 pub use png::{srgb_encode, write_png};

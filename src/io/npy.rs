@@ -21,8 +21,58 @@ pub fn read_npy(path: &Path) -> Result<GridData> {
     parse_npy(&bytes).map_err(|m| Error::file(path, m))
 }
 
+/// A C-order array of any number of dimensions read from a `.npy` file ([`read_npy_array`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NpyArray {
+    /// The shape, outermost first (as NumPy writes it).
+    pub shape: Vec<usize>,
+    /// The values in C order (last index fastest).
+    pub values: Vec<f32>,
+}
+
+/// Read a C-order array of any shape from a `.npy` file, dtype `<f4` (or `<f8`, converted). Values are
+/// not checked (a caller that needs finite values checks them). Errors are [`Error::File`] with a
+/// one-line message.
+pub fn read_npy_array(path: &Path) -> Result<NpyArray> {
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+    parse_array(&bytes).map_err(|m| Error::file(path, m))
+}
+
 /// Parse the bytes of a `.npy` file (see [`read_npy`]); the error is the message.
 fn parse_npy(bytes: &[u8]) -> std::result::Result<GridData, String> {
+    let (shape, header_end, size) = parse_header(bytes)?;
+    let &[nz, ny, nx] = shape.as_slice() else {
+        return Err(format!(
+            "grid must be a 3-D array [nz, ny, nx], got {} dimension(s)",
+            shape.len()
+        ));
+    };
+    if nx < 4 || ny < 4 || nz < 4 {
+        return Err(format!(
+            "grid dimensions must be at least 4 (cubic B-spline), got shape ({nz}, {ny}, {nx})"
+        ));
+    }
+    let values = parse_values(&bytes[header_end..], &shape, size)?;
+    let grid = GridData {
+        dims: [nx, ny, nz],
+        values,
+    };
+    grid.validate("npy").map_err(|e| match e {
+        Error::File { message, .. } => message,
+        e => e.to_string(),
+    })?;
+    Ok(grid)
+}
+
+/// Parse the bytes of a `.npy` file of any shape (see [`read_npy_array`]).
+fn parse_array(bytes: &[u8]) -> std::result::Result<NpyArray, String> {
+    let (shape, header_end, size) = parse_header(bytes)?;
+    let values = parse_values(&bytes[header_end..], &shape, size)?;
+    Ok(NpyArray { shape, values })
+}
+
+/// The shape, the offset of the data and the size of one value (4 or 8) of a `.npy` file's bytes.
+fn parse_header(bytes: &[u8]) -> std::result::Result<(Vec<usize>, usize, usize), String> {
     if bytes.len() < 10 || &bytes[..6] != MAGIC {
         return Err("not a .npy file (bad magic)".into());
     }
@@ -74,30 +124,28 @@ fn parse_npy(bytes: &[u8]) -> std::result::Result<GridData, String> {
                 .map_err(|_| format!("bad shape entry '{s}'"))
         })
         .collect::<std::result::Result<_, _>>()?;
-    let &[nz, ny, nx] = shape.as_slice() else {
-        return Err(format!(
-            "grid must be a 3-D array [nz, ny, nx], got {} dimension(s)",
-            shape.len()
-        ));
-    };
-    if nx < 4 || ny < 4 || nz < 4 {
-        return Err(format!(
-            "grid dimensions must be at least 4 (cubic B-spline), got shape ({nz}, {ny}, {nx})"
-        ));
-    }
-    let count = nx
-        .checked_mul(ny)
-        .and_then(|v| v.checked_mul(nz))
+    Ok((shape, end, size))
+}
+
+/// The values of an array of `shape` whose data (`size` bytes a value) starts `data`.
+fn parse_values(
+    data: &[u8],
+    shape: &[usize],
+    size: usize,
+) -> std::result::Result<Vec<f32>, String> {
+    let count = (shape.iter())
+        .try_fold(1usize, |a, &n| a.checked_mul(n))
         .ok_or("shape overflows")?;
-    let data = &bytes[end..];
     let need = count.checked_mul(size).ok_or("shape overflows")?;
     if data.len() < need {
+        let dims: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
         return Err(format!(
-            "truncated data: shape ({nz}, {ny}, {nx}) needs {need} bytes, file has {}",
+            "truncated data: shape ({}) needs {need} bytes, file has {}",
+            dims.join(", "),
             data.len()
         ));
     }
-    let values: Vec<f32> = if size == 4 {
+    Ok(if size == 4 {
         data[..need]
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
@@ -107,16 +155,7 @@ fn parse_npy(bytes: &[u8]) -> std::result::Result<GridData, String> {
             .chunks_exact(8)
             .map(|c| f64::from_le_bytes(c.try_into().expect("8-byte chunk")) as f32)
             .collect()
-    };
-    let grid = GridData {
-        dims: [nx, ny, nz],
-        values,
-    };
-    grid.validate("npy").map_err(|e| match e {
-        Error::File { message, .. } => message,
-        e => e.to_string(),
-    })?;
-    Ok(grid)
+    })
 }
 
 /// The text of `key`'s value in a `.npy` header dict: up to the next top-level comma or closing brace.
@@ -155,29 +194,60 @@ fn dict_value<'a>(header: &'a str, key: &str) -> std::result::Result<&'a str, St
 /// The bytes of a version 1.0 `.npy` file holding `grid` as `<f4`, shape `[nz, ny, nx]`.
 fn encode_npy(grid: &GridData) -> Vec<u8> {
     let [nx, ny, nz] = grid.dims;
-    let mut header =
-        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({nz}, {ny}, {nx}), }}");
+    encode_array(&[nz, ny, nx], &grid.values)
+}
+
+/// The bytes of a version 1.0 `.npy` file holding `values` as `<f4` with `shape`.
+fn encode_array(shape: &[usize], values: &[f32]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
+    // A one-element tuple needs its trailing comma.
+    let tuple = if dims.len() == 1 {
+        format!("({},)", dims[0])
+    } else {
+        format!("({})", dims.join(", "))
+    };
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {tuple}, }}");
     // Pad with spaces and end with '\n' so that magic + version + length + header is a multiple of 64.
     let total = 10 + header.len() + 1;
     header.push_str(&" ".repeat((64 - total % 64) % 64));
     header.push('\n');
-    let mut out = Vec::with_capacity(10 + header.len() + 4 * grid.values.len());
+    let mut out = Vec::with_capacity(10 + header.len() + 4 * values.len());
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&[1, 0]);
     out.extend_from_slice(&(header.len() as u16).to_le_bytes());
     out.extend_from_slice(header.as_bytes());
-    for v in &grid.values {
+    for v in values {
         out.extend_from_slice(&v.to_le_bytes());
     }
     out
+}
+
+/// Write `values` (C order, as many as `shape` holds) as a `.npy` file (version 1.0, `<f4`), through a
+/// temporary file renamed over `path` as [`write_npy`] does.
+pub fn write_npy_array(path: &Path, shape: &[usize], values: &[f32]) -> Result<()> {
+    if shape.iter().product::<usize>() != values.len() {
+        return Err(Error::file(
+            path,
+            format!(
+                "shape {shape:?} needs {} values, got {}",
+                shape.iter().product::<usize>(),
+                values.len()
+            ),
+        ));
+    }
+    write_bytes(path, &encode_array(shape, values))
 }
 
 /// Write `grid` as a `.npy` file (version 1.0, `<f4`, C order, shape `[nz, ny, nx]`). The bytes go to a
 /// temporary file beside `path` that is then renamed over it, so a failure never leaves a partial file.
 pub fn write_npy(path: &Path, grid: &GridData) -> Result<()> {
     grid.validate(&path.display().to_string())?;
+    write_bytes(path, &encode_npy(grid))
+}
+
+/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.
+fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     super::create_parent(path)?;
-    let bytes = encode_npy(grid);
     let mut tmp_name = path
         .file_name()
         .map(|n| n.to_os_string())
@@ -186,7 +256,7 @@ pub fn write_npy(path: &Path, grid: &GridData) -> Result<()> {
     let tmp = path.with_file_name(tmp_name);
     let write = || -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(&bytes)?;
+        f.write_all(bytes)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     };

@@ -572,11 +572,11 @@ fn selection(v: &Value, scene: &Scene) -> Result<(Vec<String>, Vec<String>)> {
         }
         params.push(name);
     }
-    let blocks = scene.grid_blocks();
+    let blocks = scene.blocks();
     let mut grids: Vec<String> = Vec::new();
     for (field, name) in strings("grids")? {
         let node = (blocks.iter().find(|b| b.name == name)).map_or(name, |b| b.node.clone());
-        scene.grid_values(&node).map_err(at(&field))?;
+        scene.block_values(&node).map_err(at(&field))?;
         if grids.contains(&node) {
             return Err(Error::field(field, format!("grid {node:?} is given twice")));
         }

@@ -30,6 +30,7 @@ use crate::integrator::{
     BoundaryBudget, DiffOptions, GradientLayout, Loss, RenderOptions, loss_gradient, render,
 };
 use crate::sampler::Sampler;
+use crate::scene::BlockKind;
 use crate::scene::Scene;
 
 /// Which terms of the derivative the gradient holds.
@@ -47,7 +48,9 @@ pub enum Terms {
 pub struct Settings {
     /// Named parameters to optimise (as [`Scene::parameters`] lists them).
     pub params: Vec<String>,
-    /// Grid nodes whose values are optimised (as [`Scene::grid_blocks`] lists them).
+    /// Blocks whose values are optimised: grid nodes and volume textures (as [`Scene::blocks`] lists
+    /// them; a texture's texels step with `learning_rate_grids` too and are kept in their field's
+    /// range).
     pub grids: Vec<String>,
     /// Iterations (Adam steps).
     pub iterations: u32,
@@ -183,7 +186,7 @@ impl Optimization {
             out.push(self.scene.parameter(p)?);
         }
         for (block, _) in &self.layout.grids {
-            out.extend_from_slice(&self.scene.grid_values(&block.node)?.values);
+            out.extend_from_slice(&self.scene.block_values(&block.node)?);
         }
         Ok(out)
     }
@@ -192,7 +195,7 @@ impl Optimization {
     pub fn grid_shapes(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
         for (block, _) in &self.layout.grids {
-            if !out.contains(&block.shape_name) {
+            if block.kind == BlockKind::Grid && !out.contains(&block.shape_name) {
                 out.push(block.shape_name.clone());
             }
         }
@@ -255,6 +258,9 @@ impl Optimization {
         gradient.iter_mut().for_each(|g| *g /= n);
         if self.settings.laplacian > 0.0 {
             for (block, first) in &self.layout.grids {
+                if block.kind != BlockKind::Grid {
+                    continue;
+                }
                 let data = self.scene.grid_values(&block.node)?;
                 let entries = &mut gradient[*first..*first + block.len()];
                 loss += smoothness(&data, self.settings.laplacian as f64, entries);
@@ -292,6 +298,7 @@ impl Optimization {
             .layout
             .grids
             .iter()
+            .filter(|(b, _)| b.kind == BlockKind::Grid)
             .map(|(b, _)| b.node.clone())
             .collect();
         let upsample = self.settings.upsample_at.contains(&index);
@@ -361,6 +368,14 @@ impl Optimization {
             }
         }
         for (block, first) in &self.layout.grids {
+            if let Some((lo, hi)) = self.scene.texture_range(&block.node) {
+                let values = proposed[*first..*first + block.len()]
+                    .iter()
+                    .map(|v| v.clamp(lo, hi))
+                    .collect();
+                self.scene.set_block_values(&block.node, values)?;
+                continue;
+            }
             let bound = self.scene.grid_diagonal(&block.node)?;
             let values = proposed[*first..*first + block.len()]
                 .iter()

@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::Progress;
 use crate::io::{self, Writer, file_message, file_name};
+use crate::scene::BlockKind;
 use crate::scene::{Scene, patch};
 use std::io::Write as _;
 use std::path::{Component, Path, PathBuf};
@@ -265,9 +266,21 @@ fn write_finals(
     let mut files: Vec<(PathBuf, Writer)> = Vec::new();
     files.push((out.join("views.png"), png_writer(picture)));
     files.push((out.join("loss.png"), png_writer(plot)));
+    let blocks = opt.scene.blocks();
     for (node, path) in grid_outputs {
-        let grid = opt.scene.grid_values(node).map_err(in_config)?;
-        let writer: Writer = Box::new(move |tmp| io::write_npy(tmp, &grid).map_err(file_message));
+        let writer: Writer = match blocks.iter().find(|b| b.node == *node) {
+            Some(b) if b.kind != BlockKind::Grid => {
+                let (shape, values) = (
+                    b.shape.clone(),
+                    opt.scene.block_values(node).map_err(in_config)?,
+                );
+                Box::new(move |tmp| io::write_npy_array(tmp, &shape, &values).map_err(file_message))
+            }
+            _ => {
+                let grid = opt.scene.grid_values(node).map_err(in_config)?;
+                Box::new(move |tmp| io::write_npy(tmp, &grid).map_err(file_message))
+            }
+        };
         files.push((path.clone(), writer));
     }
     files.push((out.join("result.json"), io::bytes_writer(result)));

@@ -3,8 +3,8 @@
 
 use crate::film::{self, Image};
 use crate::sdf::GridData;
-use numpy::ndarray::{Array2, Array3};
-use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArray3, PyArrayLikeDyn};
+use numpy::ndarray::{Array2, Array3, ArrayD, IxDyn};
+use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArray3, PyArrayDyn, PyArrayLikeDyn};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -26,15 +26,16 @@ pub(crate) fn grid_to_py<'py>(py: Python<'py>, grid: &GridData) -> Bound<'py, Py
         .into_pyarray(py)
 }
 
-/// Gradient entries (`f64`) as a new `float32` array of `shape` `[nz, ny, nx]`, as `grad` writes them.
+/// Gradient entries (`f64`) as a new `float32` array of the block's `shape` (`[nz, ny, nx]` for a grid,
+/// `[nz, ny, nx, 3]` for a colour texture), as `grad` writes them.
 pub(crate) fn gradient_to_py<'py>(
     py: Python<'py>,
-    shape: [usize; 3],
+    shape: &[usize],
     values: &[f64],
-) -> Bound<'py, PyArray3<f32>> {
+) -> Bound<'py, PyArrayDyn<f32>> {
     let values = values.iter().map(|&g| g as f32).collect();
-    Array3::from_shape_vec(shape, values)
-        .expect("a block holds nz · ny · nx entries")
+    ArrayD::from_shape_vec(IxDyn(shape), values)
+        .expect("a block holds as many entries as its shape")
         .into_pyarray(py)
 }
 

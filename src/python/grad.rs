@@ -101,7 +101,7 @@ pub(crate) fn grad<'py>(
     }
     for (block, first) in &layout.grids {
         let values = &total[*first..first + block.len()];
-        out.set_item(&block.node, gradient_to_py(py, block.shape, values))?;
+        out.set_item(&block.node, gradient_to_py(py, &block.shape, values))?;
     }
     Ok((loss, out))
 }

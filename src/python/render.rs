@@ -119,7 +119,7 @@ pub(crate) fn diff<'py>(
         let (shape, values) = super::arrays::grid_from_py(&source, &u)?;
         directions.push(GridDirection {
             node,
-            shape,
+            shape: shape.to_vec(),
             values: Arc::new(values),
             source,
         });

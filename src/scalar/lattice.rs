@@ -25,9 +25,10 @@ impl<S: Copy> LatticeTaps<S> {
     }
 }
 
-/// How a grid's values are differentiated in the current pass.
+/// How the values of a parameter block (a grid's samples, a volume texture's texels) are
+/// differentiated in the current pass.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub enum GridValues {
+pub enum BlockValues {
     /// The values are constants.
     #[default]
     Constant,
@@ -46,12 +47,15 @@ pub enum GridValues {
     },
 }
 
-impl GridValues {
+/// The former name of [`BlockValues`] (grids were the first kind of block).
+pub type GridValues = BlockValues;
+
+impl BlockValues {
     /// The reverse-mode block of [`Scalar::lattice_sum`]: the first gradient entry, if any.
     #[inline]
     pub fn block(&self) -> Slot {
         match self {
-            GridValues::Gradient { first } => Some(*first),
+            BlockValues::Gradient { first } => Some(*first),
             _ => None,
         }
     }

@@ -23,7 +23,7 @@ pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
 pub use grad::Grad;
-pub use lattice::{GridValues, LatticeTaps, lattice_sum_nested};
+pub use lattice::{BlockValues, GridValues, LatticeTaps, lattice_sum_nested};
 pub use num_dual::Dual32;
 pub use reverse::{MAX_GRADIENT_ENTRY, Mark, Recording, Rev};
 
@@ -158,7 +158,7 @@ pub trait Scalar:
 
     /// A grid's B-spline at one point: the separable sum of [`lattice_sum_nested`] over the values of
     /// a lattice of `dims = [nx, ny, nz]` (x fastest). `block` is the gradient entry of `values[0]` when
-    /// the values are differentiated in reverse mode ([`GridValues::block`]); other types ignore it.
+    /// the values are differentiated in reverse mode ([`BlockValues::block`]); other types ignore it.
     #[inline(always)]
     fn lattice_sum(
         taps: &LatticeTaps<Self>,
@@ -168,6 +168,17 @@ pub trait Scalar:
     ) -> Self {
         let _ = block;
         lattice_sum_nested(taps, values, dims[0], dims[1])
+    }
+
+    /// The derivative part of a lookup in a parameter block differentiated in reverse mode: a number
+    /// whose primal is 0 and whose derivative with respect to value `i` of the block whose first
+    /// gradient entry is `first` is `w` for each `(i, w)` of `terms` (a texture's trilinear weights).
+    /// [`Rev`] records it as one tape node; the other types, which never carry a reverse-mode block,
+    /// return zero (as [`Scalar::lattice_sum`] ignores its block).
+    #[inline(always)]
+    fn block_terms(first: u32, terms: &[(usize, f32)]) -> Self {
+        let _ = (first, terms);
+        Self::zero()
     }
 
     /// `formula`'s dedicated enclosure of its value over the sets `args` if this is a set-valued type

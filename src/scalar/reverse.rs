@@ -400,6 +400,23 @@ impl Scalar for Rev {
         self.unary(rules::sqr(self.v))
     }
 
+    /// One node of primal 0 whose operands are the block's entries with the weights as partials.
+    fn block_terms(first: u32, terms: &[(usize, f32)]) -> Self {
+        if terms.is_empty() {
+            return Self::new(0.0);
+        }
+        TAPE.with(|t| {
+            let mut t = t.borrow_mut();
+            for &(i, w) in terms {
+                let entry = first as usize + i;
+                debug_assert!(entry <= MAX_GRADIENT_ENTRY as usize);
+                t.operand(PARAM | entry as u32, w);
+            }
+            let i = t.node();
+            Self { v: 0.0, i }
+        })
+    }
+
     /// One node: the primal is the nested `f32` sum (bit for bit the image's); its operands are the 64
     /// values of block `block` (partial: the product of the three weights) and every non-constant
     /// weight (partial: the sum over the other two axes). An axis whose weights are all constant zeros

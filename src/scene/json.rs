@@ -10,7 +10,7 @@
 
 use super::integrator_kind::IntegratorKind;
 use super::{NamedEmitter, Scene, Shape};
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, MaterialTexture, Volume, texture};
 use crate::camera::Camera;
 use crate::declare::{self, Family, Kind};
 use crate::emitter::Emitter;
@@ -68,6 +68,8 @@ pub fn parse(json: &str, base_dir: &Path) -> Result<Scene> {
     let mut cx = Context {
         base_dir,
         names: HashMap::new(),
+        bsdf_nodes: 0,
+        textures: Vec::new(),
     };
     let scene = cx.scene(&root)?;
     Ok(scene.build())
@@ -83,16 +85,16 @@ struct ParsedScene {
     emitters: Vec<NamedEmitter>,
 }
 
-/// A validated shape: name, SDF, material and rigid translation.
-type ParsedShape = (String, Sdf, Bsdf, Vec3);
+/// A validated shape: name, SDF, material, rigid translation and the material's volume textures.
+type ParsedShape = (String, Sdf, Bsdf, Vec3, Vec<MaterialTexture>);
 
 impl ParsedScene {
     fn build(self) -> Scene {
         let shapes = self
             .shapes
             .into_iter()
-            .map(|(name, sdf, bsdf, translate)| {
-                Shape::translated(name, sdf, bsdf, translate.into())
+            .map(|(name, sdf, bsdf, translate, textures)| {
+                Shape::translated(name, sdf, bsdf, translate.into()).with_textures(textures)
             })
             .collect();
         Scene::new(
@@ -111,6 +113,10 @@ struct Context<'a> {
     /// Every name seen so far (shapes, emitters, sdf nodes: one namespace, because later parameter
     /// names are `<name>.<field>`), with the path that defined it.
     names: HashMap<String, String>,
+    /// Material nodes of the current shape read so far (depth-first), the index of the next.
+    bsdf_nodes: usize,
+    /// The volume textures of the current shape's material: (node, field key, texture).
+    textures: Vec<(usize, &'static str, Volume)>,
 }
 
 pub(crate) fn join(path: &str, key: &str) -> String {
@@ -413,9 +419,12 @@ impl Context<'_> {
         self.name(name, o.at("name"))?;
         // Transforms keep the sine and cosine of their angles, computed once the whole tree is read.
         let sdf = self.sdf(o.req("sdf")?, &o.at("sdf"))?.refreshed();
+        self.bsdf_nodes = 0;
+        self.textures.clear();
         let bsdf = self.bsdf(o.req("bsdf")?, &o.at("bsdf"))?;
+        let textures = material_textures(&bsdf, name, std::mem::take(&mut self.textures));
         let translate = o.opt_vec3("translate")?.unwrap_or(Vec3::ZERO);
-        Ok((name.to_string(), sdf, bsdf, translate))
+        Ok((name.to_string(), sdf, bsdf, translate, textures))
     }
 
     fn sdf(&mut self, v: &Value, path: &str) -> Result<Sdf> {
@@ -452,10 +461,89 @@ impl Context<'_> {
 
     fn bsdf(&mut self, v: &Value, path: &str) -> Result<Bsdf> {
         let kind = kind_of::<Bsdf>(v, path)?;
+        let node = self.bsdf_nodes;
+        self.bsdf_nodes += 1;
+        // A field given as a volume texture: the texture is read here, and a valid constant (its
+        // first texel) stands in for the field so that the declaration reads the node as usual.
+        let mut with_constants = None;
+        for field in kind.fields {
+            let Some((key, channels, range)) = texture::textured_field(kind.type_name, field.key)
+            else {
+                continue;
+            };
+            let Some(tex @ Value::Object(_)) = v.get(key) else {
+                continue;
+            };
+            let volume = self.volume(tex, &join(path, key), channels, range)?;
+            let first = &volume.values[..channels];
+            let constant = if channels == 3 {
+                serde_json::json!(first)
+            } else {
+                serde_json::json!(first[0])
+            };
+            let copy = with_constants.get_or_insert_with(|| v.clone());
+            copy[key] = constant;
+            self.textures.push((node, key, volume));
+        }
+        let v = with_constants.as_ref().unwrap_or(v);
         let o = Obj::new(v, path.to_string(), &keys(kind, &["type"]))?;
         let mut bsdf = (kind.blank)();
         self.fields(kind, &o, &mut bsdf, Self::bsdf)?;
         Ok(bsdf)
+    }
+
+    /// A volume texture `{"type": "volume", "name", "file", "bbox_min", "bbox_max"}` at `path` for a
+    /// field of `channels` values in `range`: the file read and checked.
+    fn volume(
+        &mut self,
+        v: &Value,
+        path: &str,
+        channels: usize,
+        range: (f32, f32),
+    ) -> Result<Volume> {
+        Obj::tag(v, path, "type", &["volume"])?;
+        let o = Obj::new(
+            v,
+            path.to_string(),
+            &["type", "name", "file", "bbox_min", "bbox_max"],
+        )?;
+        let name = o.string("name")?;
+        self.name(name, o.at("name"))?;
+        let bbox_min = o.vec3("bbox_min")?;
+        let bbox_max = o.vec3("bbox_max")?;
+        if !bbox_max.cmpgt(bbox_min).all() {
+            return Err(Error::field(
+                o.at("bbox_max"),
+                format!(
+                    "must exceed bbox_min {} in every component, got {}",
+                    fmt3(bbox_min),
+                    fmt3(bbox_max)
+                ),
+            ));
+        }
+        let file = self.base_dir.join(o.string("file")?);
+        if !file.is_file() {
+            return Err(Error::field(
+                path,
+                format!("volume file {} not found", file.display()),
+            ));
+        }
+        let fail = |message: String| {
+            Error::field(path, format!("volume file {}: {message}", file.display()))
+        };
+        let array = crate::io::read_npy_array(&file).map_err(|e| match e {
+            Error::File { message, .. } => fail(message),
+            e => fail(e.to_string()),
+        })?;
+        Volume::from_array(
+            name,
+            &array.shape,
+            array.values,
+            channels,
+            range,
+            [bbox_min, bbox_max],
+        )
+        .map_err(fail)
     }
 
     /// Reads the fields `kind` declares from `o` (its keys already checked) into `node`, in the
@@ -577,6 +665,28 @@ impl Context<'_> {
         }
         Ok(())
     }
+}
+
+/// The textures read for material `bsdf` of shape `shape` as [`MaterialTexture`]s, each with its
+/// field's parameter prefix (the material's nodes in the order of [`declare::walk`], the order they
+/// were read in).
+fn material_textures(
+    bsdf: &Bsdf,
+    shape: &str,
+    read: Vec<(usize, &'static str, Volume)>,
+) -> Vec<MaterialTexture> {
+    let mut prefixes = Vec::new();
+    declare::walk(bsdf, shape, &mut |prefix, _| {
+        prefixes.push(prefix.to_string())
+    });
+    read.into_iter()
+        .map(|(node, key, volume)| MaterialTexture {
+            node,
+            key,
+            field: format!("{}.{key}", prefixes[node]),
+            volume,
+        })
+        .collect()
 }
 
 /// The kind named by the `type` of node `v` (an object), or an error listing the family's types.

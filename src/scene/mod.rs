@@ -1,7 +1,7 @@
 //! The scene in `f32` (with a [`crate::Param`] for every differentiable number) and ray queries against it.
 //! Parsing lives in [`load`]; rendering types never see serde.
 
-mod grids;
+mod blocks;
 mod integrator_kind;
 pub(crate) mod json;
 mod params;
@@ -10,12 +10,13 @@ mod reach;
 mod selection;
 pub mod settings;
 
-pub use grids::{GridBlock, GridDirection, ParameterEntry};
+pub(crate) use blocks::visit_selections_mut;
+pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 pub use selection::Selection;
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{At, Bsdf, BsdfSample, MaterialTexture};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::error::Result;
@@ -36,6 +37,8 @@ pub struct Shape {
     pub sdf: Sdf,
     /// The material.
     pub bsdf: Bsdf,
+    /// The material's fields given by volume textures ([`crate::bsdf::texture`]); empty for most.
+    pub textures: Vec<MaterialTexture>,
     /// Rigid translation of the whole shape (parameters `<name>.translate.x|y|z`).
     pub translate: Param3,
     /// World-space box around the surface: [`Sdf::bounds`] moved by `translate` (possibly infinite).
@@ -73,6 +76,7 @@ impl Shape {
             name: name.into(),
             sdf,
             bsdf,
+            textures: Vec::new(),
             translate,
             bounds,
             lipschitz,
@@ -80,6 +84,63 @@ impl Shape {
             convex,
             empty_space,
         }
+    }
+
+    /// The shape with `textures` standing in for fields of its material.
+    pub fn with_textures(mut self, textures: Vec<MaterialTexture>) -> Self {
+        self.textures = textures;
+        self
+    }
+
+    /// World point `x` in the shape's frame, where its volume textures are read: `x − translate`,
+    /// then through the inverse of each transform node at the top of the sdf tree
+    /// ([`Sdf::to_root_frame`]), generic (lifted parameters).
+    #[inline]
+    pub fn material_point<S: Scalar>(&self, x: Vec3<S>) -> Vec3<S> {
+        self.sdf.to_root_frame(x - self.translate.get::<S>())
+    }
+
+    /// The material's `f(wi, wo)` at world point `x` ([`Bsdf::eval_at`]): its textured fields read at
+    /// [`Shape::material_point`] of `x` (not computed for a material without texture).
+    #[inline]
+    pub fn bsdf_eval<S: Scalar>(
+        &self,
+        x: Vec3<S>,
+        n: Vec3<S>,
+        wi: Vec3<S>,
+        wo: Vec3<S>,
+    ) -> Vec3<S> {
+        if self.textures.is_empty() {
+            return self.bsdf.eval(n, wi, wo);
+        }
+        let at = At::new(&self.textures, self.material_point(x));
+        self.bsdf.eval_at(&at, n, wi, wo)
+    }
+
+    /// The material's sample at world point `p` ([`Bsdf::sample_at`]).
+    #[inline]
+    pub fn bsdf_sample(
+        &self,
+        p: glam::Vec3,
+        n: glam::Vec3,
+        wo: glam::Vec3,
+        u: glam::Vec2,
+    ) -> Option<BsdfSample> {
+        if self.textures.is_empty() {
+            return self.bsdf.sample(n, wo, u);
+        }
+        let at = At::new(&self.textures, self.material_point(Vec3::constant(p)));
+        self.bsdf.sample_at(&at, n, wo, u)
+    }
+
+    /// The material's density at world point `p` ([`Bsdf::pdf_at`]).
+    #[inline]
+    pub fn bsdf_pdf(&self, p: glam::Vec3, n: glam::Vec3, wo: glam::Vec3, wi: glam::Vec3) -> f32 {
+        if self.textures.is_empty() {
+            return self.bsdf.pdf(n, wo, wi);
+        }
+        let at = At::new(&self.textures, self.material_point(Vec3::constant(p)));
+        self.bsdf.pdf_at(&at, n, wo, wi)
     }
 
     /// `φ(p)` in world coordinates, generic (lifted parameters, translation included).

@@ -21,6 +21,14 @@ pub(super) fn root_prefix(shape: &str, sdf: &Sdf) -> String {
     }
 }
 
+/// Whether parameter `name` belongs to a material field that a volume texture stands in for.
+fn textured(textures: &[crate::bsdf::MaterialTexture], name: &str) -> bool {
+    textures.iter().any(|t| {
+        name.strip_prefix(t.field.as_str())
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with('.'))
+    })
+}
+
 /// Generates the walk over every parameter of a scene in the order of [`Scene::parameters`] (camera,
 /// then each shape's translation, sdf tree and material, then the emitters), for shared or mutable
 /// access: the same walk written once keeps the names of [`Scene::parameters`] and
@@ -42,7 +50,13 @@ macro_rules! scene_walk {
                 }
                 let root = root_prefix(name, &s.sdf);
                 s.sdf.$sdf(&root, f);
-                declare::$params(&$($m)? s.bsdf, name, f);
+                // A field given by a volume texture has no number parameters (its texels are a block).
+                let textures = &s.textures;
+                declare::$params(&$($m)? s.bsdf, name, &mut |n, p| {
+                    if !textured(textures, n) {
+                        f(n, p)
+                    }
+                });
             }
             for e in &$($m)? scene.emitters {
                 declare::$params(&$($m)? e.emitter, &e.name, f);
@@ -111,6 +125,8 @@ impl Scene {
     ///   even when the file gives no rotation: it rotates about the default `+y` axis), `scale`. Union,
     ///   intersection and difference have no fields; a grid has `level`. A grid's samples are not listed
     ///   here one by one: they are one block `<prefix>.values` ([`Scene::grid_blocks`]).
+    /// - A material field given by a volume texture has no parameters of its own: the texture's texels
+    ///   are one block `<texture name>.values` ([`Scene::blocks`]).
     /// - Emitter `e`: rectangle `e.center.x|y|z`, `e.size.x|y` (the edge lengths along `u` and along
     ///   `v = normal × u`: the components of the two-element `size` array, named like any vector's),
     ///   `e.radiance.r|g|b`; sphere `e.center.*`, `e.radius`, `e.radiance.*`; constant `e.radiance.*`

@@ -262,6 +262,22 @@ impl Walk<'_> {
         };
         for field in kind.fields {
             let key = field.key;
+            // A field given by a volume texture: its file, like a grid's (its texels are a block).
+            let number = matches!(
+                field.value,
+                declare::Value::Number { .. } | declare::Value::Vector { .. }
+            );
+            if let (true, Some(Value::Object(texture))) = (number, o.get_mut(key)) {
+                let at = format!("{path}.{key}");
+                let name = string(texture, "name", &at)?;
+                let file = string(texture, "file", &at)?;
+                self.files.push((name.clone(), file));
+                if let Some(k) = self.new_files.iter().position(|(n, _)| *n == name) {
+                    texture.insert("file".into(), Value::String(self.new_files[k].1.clone()));
+                    self.replaced[k] = true;
+                }
+                continue;
+            }
             match &field.value {
                 declare::Value::Number { default, .. } => self.scalar(o, key, p, *default)?,
                 declare::Value::Vector {

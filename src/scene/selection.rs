@@ -6,15 +6,15 @@
 //!
 //! Inside an estimator the selection is applied to a copy of the scene ([`Selection::apply`]): each
 //! selected [`crate::Param`] gets its derivative slot and each selected grid its
-//! [`GridValues`], which the scalar type lifts when the scene is evaluated
+//! [`BlockValues`], which the scalar type lifts when the scene is evaluated
 //! ([`crate::scalar::Scalar::lift`]).
 
-use super::{GridDirection, Scene};
+use super::{BlockKind, GridDirection, ParamBlock, Scene};
 use crate::error::{Error, Result};
-use crate::scalar::GridValues;
+use crate::scalar::BlockValues;
 
 /// Selected grid nodes and how their values are differentiated.
-pub(crate) type GridChoices = Vec<(String, GridValues)>;
+pub(crate) type GridChoices = Vec<(String, BlockValues)>;
 
 /// The parameters and grid values a derivative pass differentiates (module docs). Forward mode: slot
 /// `k` is `names()[k]`, the named parameters first, then one slot per grid direction. Reverse mode
@@ -112,7 +112,7 @@ impl Scene {
         first_slot: usize,
         directions: &[GridDirection],
     ) -> Result<(GridChoices, Vec<String>)> {
-        let blocks = self.grid_blocks();
+        let blocks = self.blocks();
         let mut selection: GridChoices = Vec::new();
         let mut names = Vec::new();
         for (k, direction) in directions.iter().enumerate() {
@@ -130,19 +130,27 @@ impl Scene {
                 ));
             }
             if direction.shape != block.shape {
-                let [nz, ny, nx] = direction.shape;
+                let given = ParamBlock {
+                    shape: direction.shape.clone(),
+                    ..block.clone()
+                };
+                let what = match block.kind {
+                    BlockKind::Grid => "grid",
+                    BlockKind::Volume => "volume texture",
+                };
                 return Err(Error::file(
                     &direction.source,
                     format!(
-                        "shape [{nz}, {ny}, {nx}], but grid {node:?} has shape {:?} (a direction \
-                         has one value per grid value)",
-                        block.shape
+                        "shape {}, but {what} {node:?} has shape {} (a direction has one value per \
+                         value of the block)",
+                        given.shape_text(),
+                        block.shape_text()
                     ),
                 ));
             }
             let slot = (first_slot + k) as u32;
             let u = direction.values.clone();
-            selection.push((node, GridValues::Direction { slot, u }));
+            selection.push((node, BlockValues::Direction { slot, u }));
             names.push(block.name.clone());
         }
         Ok((selection, names))

@@ -16,7 +16,7 @@
 use super::GridData;
 use crate::error::{Error, Result};
 use crate::math::{Aabb, Vec3};
-use crate::scalar::{GridValues, LatticeTaps, Scalar, lattice_sum_nested};
+use crate::scalar::{BlockValues, LatticeTaps, Scalar, lattice_sum_nested};
 
 impl GridData {
     /// A grid after checking that every dimension is at least 4, that there are `nx · ny · nz` values
@@ -110,7 +110,7 @@ fn spline<S: Scalar>(
     data: &GridData,
     bmin: glam::Vec3,
     bmax: glam::Vec3,
-    selection: &GridValues,
+    selection: &BlockValues,
     q: Vec3<S>,
 ) -> S {
     let ext = bmax - bmin;
@@ -133,7 +133,7 @@ fn spline<S: Scalar>(
     };
     let value = S::lattice_sum(&taps, &data.values, data.dims, selection.block());
     match selection {
-        GridValues::Direction { slot, u } if u.len() == data.values.len() => {
+        BlockValues::Direction { slot, u } if u.len() == data.values.len() => {
             value
                 + S::lift(0.0, Some(*slot))
                     * lattice_sum_nested(&taps, u, data.dims[0], data.dims[1])
@@ -149,7 +149,7 @@ pub(super) fn eval<S: Scalar>(
     data: &GridData,
     bmin: glam::Vec3,
     bmax: glam::Vec3,
-    selection: &GridValues,
+    selection: &BlockValues,
     p: Vec3<S>,
 ) -> S {
     // Interval types take the certified path: a box may span several cells, which the primal branches
@@ -485,7 +485,7 @@ pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level:
 pub(super) mod kinds {
     use crate::declare::{Field, Kind, Rule, Value, on};
     use crate::error::Error;
-    use crate::scalar::{GridValues, Param};
+    use crate::scalar::{BlockValues, Param};
     use crate::sdf::{GridData, Sdf, read_npy};
     use std::sync::Arc;
 
@@ -543,7 +543,7 @@ pub(super) mod kinds {
             bbox_min: glam::Vec3::ZERO,
             bbox_max: glam::Vec3::ZERO,
             level: Param::new(0.0),
-            selection: GridValues::Constant,
+            selection: BlockValues::Constant,
         },
         example: r#"{"type": "grid", "file": "example_grid.npy", "bbox_min": [-1, -0.5, -1], "bbox_max": [1, 1.5, 1], "level": 0.05}"#,
     };

@@ -60,7 +60,7 @@ primitive::primitives! {
 use crate::declare::{Family, Kind};
 use crate::error::Result;
 use crate::math::{Aabb, Vec3};
-use crate::scalar::{Dual2Vec3, DualVec3, GridValues, Param, Param3, Scalar};
+use crate::scalar::{BlockValues, Dual2Vec3, DualVec3, Param, Param3, Scalar};
 use std::sync::Arc;
 
 /// Values of a grid SDF: `nx · ny · nz` samples, x fastest (the layout of a C-order `.npy` of shape
@@ -188,7 +188,7 @@ pub enum Sdf {
         level: Param,
         /// How the samples are differentiated in the current pass (the parameter block
         /// `<node>.values`; constants unless selected).
-        selection: GridValues,
+        selection: BlockValues,
     },
     /// A node given a `name` in the scene file, so that its parameters are `<name>.<field>` (see
     /// [`crate::scene::Scene::parameters`]). It is the child in every respect: evaluation, gradient,
@@ -774,7 +774,7 @@ impl Sdf {
             bbox_min,
             bbox_max,
             level: Param::new(0.0),
-            selection: GridValues::Constant,
+            selection: BlockValues::Constant,
         })
     }
 }

@@ -420,6 +420,30 @@ fn map_box(
     out.expanded(margin(&out))
 }
 
+impl Sdf {
+    /// Point `p` of this node's frame in the frame of the chain of transform nodes at the top of the
+    /// tree (names skipped): through each transform's inverse, down to the first node that is neither
+    /// (`p` itself when the tree has no transform at its top). Volume textures are read there.
+    #[inline]
+    pub fn to_root_frame<S: Scalar>(&self, p: Vec3<S>) -> Vec3<S> {
+        match self {
+            Sdf::Named { child, .. } => child.to_root_frame(p),
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                trig,
+                scale,
+                child,
+            } => {
+                let frame = Similarity::<S>::for_eval(translate, *axis, angle, *trig, scale);
+                child.to_root_frame(frame.to_child_point(p))
+            }
+            _ => p,
+        }
+    }
+}
+
 /// `φ(x) = s φ_child(R⁻¹(x − t)/s)`.
 #[inline(always)]
 pub(super) fn eval<S: Scalar, const FACES: bool>(

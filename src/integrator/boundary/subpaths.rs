@@ -112,9 +112,7 @@ pub fn connect_to_camera(
         return None;
     }
     let wo = -to_x / dist;
-    let f = scene.shapes[shape]
-        .bsdf
-        .eval::<f32>(n.into(), wi.into(), wo.into());
+    let f = scene.shapes[shape].bsdf_eval::<f32>(x.into(), n.into(), wi.into(), wo.into());
     let f: glam::Vec3 = f.into();
     if f == glam::Vec3::ZERO {
         return None;
@@ -158,11 +156,13 @@ pub fn camera_side(
         if depth == max_depth {
             return;
         }
-        let bsdf = &scene.shapes[s].bsdf;
-        let Some(bs) = bsdf.sample(n, wi, sampler.next_2d()) else {
+        let surface = &scene.shapes[s];
+        let Some(bs) = surface.bsdf_sample(x, n, wi, sampler.next_2d()) else {
             return;
         };
-        let f: glam::Vec3 = bsdf.eval::<f32>(n.into(), wi.into(), bs.wi.into()).into();
+        let f: glam::Vec3 = surface
+            .bsdf_eval::<f32>(x.into(), n.into(), wi.into(), bs.wi.into())
+            .into();
         beta *= f * (n.dot(bs.wi).abs() / bs.pdf);
         if beta == glam::Vec3::ZERO || !beta.is_finite() {
             return;

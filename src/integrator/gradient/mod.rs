@@ -32,7 +32,7 @@ use crate::integrator::diff::interior;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::{DiffOptions, RenderOptions, require_continuous_filter};
 use crate::integrator::primal::render;
-use crate::scalar::{GridValues, MAX_GRADIENT_ENTRY, Rev};
+use crate::scalar::{BlockValues, MAX_GRADIENT_ENTRY, Rev};
 use crate::scene::{GridBlock, Scene, Selection};
 
 /// Reverse mode's selection: where each selected parameter sits in the gradient, named parameters
@@ -54,7 +54,7 @@ impl GradientLayout {
     /// `grids` (as [`Scene::grid_blocks`] lists them) of `scene` for reverse mode. Errors: unknown or
     /// repeated names; more entries than a gradient can index.
     pub fn select(scene: &Scene, params: &[String], grids: &[String]) -> Result<Self> {
-        let blocks = scene.grid_blocks();
+        let blocks = scene.blocks();
         let mut entries = params.len();
         let mut chosen = Vec::new();
         let mut selection = Vec::new();
@@ -68,13 +68,13 @@ impl GradientLayout {
                 chosen.push((block.clone(), entries));
                 selection.push((
                     node.clone(),
-                    GridValues::Gradient {
+                    BlockValues::Gradient {
                         first: entries as u32,
                     },
                 ));
                 entries += block.len();
             } else {
-                selection.push((node.clone(), GridValues::Constant));
+                selection.push((node.clone(), BlockValues::Constant));
             }
             if entries > MAX_GRADIENT_ENTRY as usize {
                 return Err(Error::field(
@@ -95,7 +95,7 @@ impl GradientLayout {
     /// A copy of `scene` with the layout's entries selected. Errors: a parameter or grid `scene` does
     /// not have, a grid whose dimensions changed since the layout was made (select again).
     fn apply(&self, scene: &Scene) -> Result<Scene> {
-        let blocks = scene.grid_blocks();
+        let blocks = scene.blocks();
         for (block, _) in &self.grids {
             if let Some(now) = blocks.iter().find(|b| b.node == block.node)
                 && now.shape != block.shape
@@ -103,7 +103,7 @@ impl GradientLayout {
                 return Err(Error::field(
                     "grids",
                     format!(
-                        "grid {:?} has shape {:?}, but was selected with shape {:?}: select it again",
+                        "block {:?} has shape {:?}, but was selected with shape {:?}: select it again",
                         block.node, now.shape, block.shape
                     ),
                 ));
