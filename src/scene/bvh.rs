@@ -4,15 +4,16 @@
 //! Built once per scene ([`super::Scene::new`], which every change of a parameter goes through), over the
 //! bounds of the shapes with finite bounds, by binned surface-area heuristic (12 bins per axis, at most
 //! [`MAX_LEAF`] shapes per leaf). Shapes with unbounded (planes) or empty bounds are kept apart and
-//! tested on every ray.
+//! tested on every ray, and so are shapes whose box is a large part of the whole scene's (a floor slab,
+//! a room): in the tree they would make every node above them as large.
 //!
 //! # What a node test guarantees
 //!
 //! A shape is traced over its bounds grown by the local tolerance where the ray enters them
 //! ([`super::Scene::trace_interval`]). A node is tested the same way (the same slab arithmetic, in the
-//! same order), over its box grown by the tolerance where the ray *leaves* the node's box (or at the
-//! ray's start if it leaves before): every child's box lies inside the node's, so a ray enters or
-//! passes a child no later than that, and the tolerance only grows along a ray. Each step of the slab
+//! same order), over its box grown by the tolerance where the ray *leaves* the root's box (or at the
+//! ray's start if it leaves before): every shape's box lies inside the root's, so a ray enters or
+//! passes a shape no later than that, and the tolerance only grows along a ray. Each step of the slab
 //! test is monotone in the box and in the margin, rounding included, so the node's interval contains
 //! every one of its shapes' intervals, bit for bit: culling by node never drops a shape that the
 //! shape's own test would keep.
@@ -30,6 +31,9 @@ use glam::Vec3A;
 
 /// Most shapes in a leaf.
 pub(crate) const MAX_LEAF: usize = 2;
+/// Shapes whose box has more than this fraction of the surface area of the box around every bounded
+/// shape are kept out of the hierarchy (tested on every ray).
+const LARGE: f32 = 0.25;
 /// Deepest level split (a leaf there holds whatever is left): bounds the build's recursion.
 const MAX_DEPTH: usize = 48;
 /// SAH bins per axis.
@@ -64,10 +68,15 @@ pub struct Bvh {
 impl Bvh {
     /// The hierarchy over shapes with bounds `bounds` (indexed as the scene's shapes).
     pub fn build(bounds: &[Aabb]) -> Self {
+        let bounded = |b: &Aabb| b.is_finite() && !b.is_empty();
+        let all = (bounds.iter().filter(|b| bounded(b))).fold(Aabb::EMPTY, |a, b| a.union(b));
+        // A shape whose box is a large part of everything's (a floor, a room's walls) would make
+        // every node above it as large: it is tested apart, on every ray.
+        let large = |b: &Aabb| area(b) > LARGE * area(&all);
         let mut order = Vec::new();
         let mut apart = Vec::new();
         for (i, b) in bounds.iter().enumerate() {
-            if b.is_finite() && !b.is_empty() {
+            if bounded(b) && !large(b) {
                 order.push(i as u32);
             } else {
                 apart.push(i as u32);
@@ -212,54 +221,61 @@ fn area(b: &Aabb) -> f32 {
     e.x * e.y + e.y * e.z + e.z * e.x
 }
 
-/// A ray's slab-test data, computed once per query.
+/// A ray's slab-test data and the margin its node tests grow boxes by, computed once per query.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct RaySlabs {
     o: Vec3A,
     inv: Vec3A,
-    abs_inv: Vec3A,
     parallel: glam::BVec3A,
+    /// The margin: the tolerance where the ray leaves the root's box (or at its start if before).
+    r: f32,
+    /// `r / |d|` per axis the ray is not parallel to: how far the margin moves a slab's ends.
+    grow: Vec3A,
 }
 
 impl RaySlabs {
+    /// The slab data of `ray`, nodes grown by `margin(t)` at the `t` where the ray leaves `root` (the
+    /// box around every node) or `t_min` if before: at least the margin any shape inside gets
+    /// ([`super::Scene::trace_interval`] takes it where the ray enters or passes the shape's box, no
+    /// later than where it leaves the root's, and the margin only grows along a ray).
     #[inline]
-    pub fn new(ray: &Ray) -> Self {
+    pub fn new(ray: &Ray, root: &Aabb, t_min: f32, margin: impl FnOnce(f32) -> f32) -> Self {
         let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
         let inv = d.recip();
+        let parallel = d.cmpeq(Vec3A::ZERO);
+        let (min, max) = (Vec3A::from(root.min), Vec3A::from(root.max));
+        let hi = Vec3A::select(
+            parallel,
+            Vec3A::INFINITY,
+            ((min - o) * inv).max((max - o) * inv),
+        );
+        let r = margin(hi.min_element().max(t_min));
         Self {
             o,
             inv,
-            abs_inv: inv.abs(),
-            parallel: d.cmpeq(Vec3A::ZERO),
+            parallel,
+            r,
+            grow: Vec3A::select(parallel, Vec3A::ZERO, r * inv.abs()),
         }
     }
 
-    /// The interval of the ray in `[t_min, t_max]` within `b` grown by `margin(t)`, `t` where the ray
-    /// leaves `b` itself (`t_min` if before): the node test (see the [module docs](self)), the same
-    /// operations as [`Aabb::clip_with_margin`] with a margin at least as large as any shape inside
-    /// `b` gets there.
+    /// The interval of the ray in `[t_min, t_max]` within `b` grown by the ray's margin: the node
+    /// test (see the [module docs](self)), the same operations as [`Aabb::clip_with_margin`] with a
+    /// margin at least as large as any shape inside `b` gets.
     #[inline]
-    pub fn node_interval(
-        &self,
-        b: &Aabb,
-        t_min: f32,
-        t_max: f32,
-        margin: impl FnOnce(f32) -> f32,
-    ) -> Option<(f32, f32)> {
+    pub fn node_interval(&self, b: &Aabb, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
         let (min, max) = (Vec3A::from(b.min), Vec3A::from(b.max));
         let ta = (min - self.o) * self.inv;
         let tb = (max - self.o) * self.inv;
         let lo = Vec3A::select(self.parallel, Vec3A::NEG_INFINITY, ta.min(tb));
         let hi = Vec3A::select(self.parallel, Vec3A::INFINITY, ta.max(tb));
-        let exit = hi.min_element();
-        let r = margin(exit.max(t_min));
-        let outside = self.o.cmplt(min - Vec3A::splat(r)) | self.o.cmpgt(max + Vec3A::splat(r));
+        let r = Vec3A::splat(self.r);
+        let outside = self.o.cmplt(min - r) | self.o.cmpgt(max + r);
         if (self.parallel & outside).any() {
             return None;
         }
-        let grow = Vec3A::select(self.parallel, Vec3A::ZERO, r * self.abs_inv);
-        let t0 = t_min.max((lo - grow).max_element());
-        let t1 = t_max.min((hi + grow).min_element());
+        let t0 = t_min.max((lo - self.grow).max_element());
+        let t1 = t_max.min((hi + self.grow).min_element());
         (t0 <= t1).then_some((t0, t1))
     }
 }
@@ -279,7 +295,7 @@ pub(crate) const SHAPE: u32 = 1 << 31;
 
 impl Entry {
     #[inline]
-    fn before(&self, o: &Self) -> bool {
+    pub fn before(&self, o: &Self) -> bool {
         match self.t0.total_cmp(&o.t0) {
             std::cmp::Ordering::Less => true,
             std::cmp::Ordering::Greater => false,
@@ -298,6 +314,12 @@ impl Queue {
     #[inline]
     pub fn clear(&mut self) {
         self.heap.clear();
+    }
+
+    /// Whether `e` comes before every queued entry (it would be popped next).
+    #[inline]
+    pub fn comes_first(&self, e: &Entry) -> bool {
+        self.heap.first().is_none_or(|top| e.before(top))
     }
 
     #[inline]
@@ -437,8 +459,8 @@ mod tests {
                 _ => (b[k % b.len()].center() + Vec3::new(u(), u(), u()) * 0.3 - o).normalize(),
             };
             let ray = Ray::new(o, d);
-            let slabs = RaySlabs::new(&ray);
-            let node = slabs.node_interval(&parent, 0.0, 50.0, margin);
+            let slabs = RaySlabs::new(&ray, &parent, 0.0, margin);
+            let node = slabs.node_interval(&parent, 0.0, 50.0);
             for child in &b {
                 if let Some((c0, c1)) = child.clip_with_margin(&ray, 0.0, 50.0, margin) {
                     kept += 1;

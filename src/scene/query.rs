@@ -154,7 +154,6 @@ impl Scene {
         let t_max = nearest.t;
         let origin = ray.o.abs().max_element();
         let margin = |entry: f32| self.trace.eps_at(origin + entry);
-        let slabs = RaySlabs::new(ray);
         QUEUE.with(|queue| {
             let mut queue = queue.borrow_mut();
             queue.clear();
@@ -173,12 +172,23 @@ impl Scene {
             for &i in &bvh.apart {
                 push_shape(&mut queue, i);
             }
-            if let Some(root) = bvh.nodes.first()
-                && let Some((t0, t1)) = slabs.node_interval(&root.bounds, 0.0, t_max, margin)
-            {
+            let Some(root) = bvh.nodes.first() else {
+                while let Some(e) = queue.pop() {
+                    if !(e.t0 < nearest.t) {
+                        break;
+                    }
+                    let i = (e.tag & !SHAPE) as usize;
+                    self.trace_shape(i, ray, e.t0, e.t1.min(nearest.t), spread, nearest);
+                }
+                return;
+            };
+            let slabs = RaySlabs::new(ray, &root.bounds, 0.0, margin);
+            // The entry being processed: popped, or a child that would be popped next.
+            let mut next = None;
+            if let Some((t0, t1)) = slabs.node_interval(&root.bounds, 0.0, t_max) {
                 queue.push(Entry { t0, t1, tag: 0 });
             }
-            while let Some(e) = queue.pop() {
+            while let Some(e) = next.take().or_else(|| queue.pop()) {
                 // Nothing queued starts before this, and only shapes starting before the nearest hit
                 // are traced.
                 if !(e.t0 < nearest.t) {
@@ -191,10 +201,25 @@ impl Scene {
                 }
                 let node = bvh.nodes[e.tag as usize];
                 if node.count == 0 {
-                    for c in [node.first, node.first + 1] {
-                        let child = &bvh.nodes[c as usize].bounds;
-                        if let Some((t0, t1)) = slabs.node_interval(child, 0.0, nearest.t, margin) {
-                            queue.push(Entry { t0, t1, tag: c });
+                    let child = |c: u32| {
+                        let (t0, t1) =
+                            slabs.node_interval(&bvh.nodes[c as usize].bounds, 0.0, nearest.t)?;
+                        Some(Entry { t0, t1, tag: c })
+                    };
+                    let (a, b) = (child(node.first), child(node.first + 1));
+                    let (near, far) = match (a, b) {
+                        (Some(x), Some(y)) if y.before(&x) => (Some(y), Some(x)),
+                        (x, y) => (x.or(y), x.and(y)),
+                    };
+                    if let Some(far) = far {
+                        queue.push(far);
+                    }
+                    // The nearer child goes on at once when it would be popped next anyway.
+                    if let Some(near) = near {
+                        if queue.comes_first(&near) {
+                            next = Some(near);
+                        } else {
+                            queue.push(near);
                         }
                     }
                 } else {
@@ -272,11 +297,8 @@ impl Scene {
         };
         let origin = ray.o.abs().max_element();
         let margin = |entry: f32| self.trace.eps_at(origin + entry);
-        let slabs = RaySlabs::new(ray);
-        if slabs
-            .node_interval(&root.bounds, 0.0, t_max, margin)
-            .is_none()
-        {
+        let slabs = RaySlabs::new(ray, &root.bounds, 0.0, margin);
+        if slabs.node_interval(&root.bounds, 0.0, t_max).is_none() {
             return false;
         }
         // Depth first, the nearer child first: an occluder near the start ends the walk early.
@@ -307,7 +329,7 @@ impl Scene {
             let hit = |c: u32| {
                 let child = &bvh.nodes[c as usize].bounds;
                 slabs
-                    .node_interval(child, 0.0, t_max, margin)
+                    .node_interval(child, 0.0, t_max)
                     .map(|(t0, _)| (t0, c))
             };
             let (near, far) = match (hit(a), hit(b)) {
