@@ -138,7 +138,7 @@ impl Bvh {
         let mut best: Option<(f32, usize, usize)> = None;
         for axis in 0..3 {
             let (lo, hi) = (cb.min[axis], cb.max[axis]);
-            if !(hi > lo) {
+            if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
                 continue;
             }
             let scale = BINS as f32 / (hi - lo);

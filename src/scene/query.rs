@@ -174,7 +174,7 @@ impl Scene {
             }
             let Some(root) = bvh.nodes.first() else {
                 while let Some(e) = queue.pop() {
-                    if !(e.t0 < nearest.t) {
+                    if e.t0.partial_cmp(&nearest.t) != Some(std::cmp::Ordering::Less) {
                         break;
                     }
                     let i = (e.tag & !SHAPE) as usize;
@@ -191,7 +191,7 @@ impl Scene {
             while let Some(e) = next.take().or_else(|| queue.pop()) {
                 // Nothing queued starts before this, and only shapes starting before the nearest hit
                 // are traced.
-                if !(e.t0 < nearest.t) {
+                if e.t0.partial_cmp(&nearest.t) != Some(std::cmp::Ordering::Less) {
                     break;
                 }
                 if e.tag & SHAPE != 0 {
