@@ -19,7 +19,6 @@ use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::Scalar;
 use crate::scene::{Hit, Intersection, Scene, Surface};
-use crate::trace::ShapeTrace;
 
 /// What a recorded vertex lies on.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -101,22 +100,7 @@ pub fn occluded(
             return true;
         }
     }
-    for (i, shape) in scene.shapes.iter().enumerate() {
-        if Some(i) == leaving {
-            continue;
-        }
-        let Some((t0, t1)) = scene.trace_interval(shape, ray, t_max) else {
-            continue;
-        };
-        // The shape's own tolerances, as `Scene::intersect` traces it: a shadow ray and a camera ray along
-        // the same line agree on what they hit.
-        match shape.trace(ray, t0, t1, &scene.shape_trace(shape)) {
-            ShapeTrace::Hit(t) if t < t_max => return true,
-            ShapeTrace::Exhausted(_) => counters.exhausted += 1,
-            _ => {}
-        }
-    }
-    false
+    scene.shapes_block(ray, t_max, leaving, &mut counters.exhausted)
 }
 
 /// What a ray sees, when only emission along it matters (the last segment of a path).

@@ -2,16 +2,19 @@
 //! Parsing lives in [`load`]; rendering types never see serde.
 
 mod blocks;
+mod bvh;
 mod integrator_kind;
 pub(crate) mod json;
 mod params;
 pub mod patch;
+mod query;
 mod reach;
 mod selection;
 pub mod settings;
 
 pub(crate) use blocks::visit_selections_mut;
 pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};
+pub use bvh::Bvh;
 pub use integrator_kind::IntegratorKind;
 pub use json::{load, parse};
 pub use selection::Selection;
@@ -280,19 +283,14 @@ pub struct Scene {
     pub finite_emitters: Vec<usize>,
     /// Index of the environment emitter, if any (at most one).
     pub environment: Option<usize>,
+    /// The hierarchy over the shapes' bounds that ray queries use, built by [`Scene::new`]: after
+    /// changing [`Scene::shapes`] in place (their number or bounds), call [`Scene::refresh_bvh`].
+    pub bvh: Arc<Bvh>,
+    /// Whether ray queries use [`Scene::bvh`] (they give the same results without it, shape by shape
+    /// over all of them; tests compare the two).
+    #[doc(hidden)]
+    pub use_bvh: bool,
 }
-
-/// The nearest surface found so far by [`Scene::intersect`].
-struct Nearest {
-    t: f32,
-    surface: Option<Surface>,
-    /// Normal of an emitter hit (shape normals are computed once, for the final hit only).
-    normal: glam::Vec3,
-    exhausted: bool,
-}
-
-/// Scenes with at most this many shapes have them traced nearest-bounds-first (sorted on the stack).
-const MAX_SORTED_SHAPES: usize = 16;
 
 /// The tracer's tolerance floor relative to the scene's smallest shape: `eps = RELATIVE_EPS · s`, `s` the
 /// smallest extent (along any axis) of any finite shape's bounds ([`crate::trace::TraceSettings`]).
@@ -327,6 +325,9 @@ impl Scene {
             eps: (RELATIVE_EPS * scale).max(f32::MIN_POSITIVE),
             ..TraceSettings::default()
         };
+        let bvh = Arc::new(Bvh::build(
+            &shapes.iter().map(|s| s.bounds).collect::<Vec<_>>(),
+        ));
         Self {
             camera,
             integrator,
@@ -336,6 +337,8 @@ impl Scene {
             trace,
             finite_emitters,
             environment,
+            bvh,
+            use_bvh: true,
         }
     }
 
@@ -419,98 +422,6 @@ impl Scene {
     #[inline]
     pub fn leaving(&self, shape: usize, n: glam::Vec3, w: glam::Vec3) -> Option<usize> {
         (self.shapes[shape].convex && n.dot(w) > 0.0).then_some(shape)
-    }
-
-    /// The first surface hit by `ray` in `(0, t_max)`, resolving `spread`, skipping shape `leaving`.
-    fn nearest(&self, ray: &Ray, t_max: f32, spread: f32, leaving: Option<usize>) -> Intersection {
-        let mut nearest = Nearest {
-            t: t_max,
-            surface: None,
-            normal: glam::Vec3::ZERO,
-            exhausted: false,
-        };
-        for &i in &self.finite_emitters {
-            if let Some((t, n)) = self.emitters[i].emitter.intersect(ray, nearest.t) {
-                nearest = Nearest {
-                    t,
-                    surface: Some(Surface::Emitter(i)),
-                    normal: n,
-                    ..nearest
-                };
-            }
-        }
-        // Trace shapes in the order the ray enters their bounds, so a near hit cuts the intervals of
-        // the shapes behind it (most of a floor's pixels never march through the object above it).
-        let mut intervals = [(0.0f32, 0.0f32, 0usize); MAX_SORTED_SHAPES];
-        let mut count = 0;
-        let sorted = self.shapes.len() <= MAX_SORTED_SHAPES;
-        for (i, shape) in self.shapes.iter().enumerate() {
-            if Some(i) == leaving {
-                continue;
-            }
-            let Some((t0, t1)) = self.trace_interval(shape, ray, nearest.t) else {
-                continue;
-            };
-            if sorted {
-                let mut k = count;
-                while k > 0 && intervals[k - 1].0 > t0 {
-                    intervals[k] = intervals[k - 1];
-                    k -= 1;
-                }
-                intervals[k] = (t0, t1, i);
-                count += 1;
-            } else {
-                self.trace_shape(i, ray, t0, t1, spread, &mut nearest);
-            }
-        }
-        for &(t0, t1, i) in &intervals[..count] {
-            if t0 < nearest.t {
-                self.trace_shape(i, ray, t0, t1.min(nearest.t), spread, &mut nearest);
-            }
-        }
-        match nearest.surface {
-            Some(surface) => {
-                let p = ray.at(nearest.t);
-                let n = match surface {
-                    Surface::Shape(i) => self.shapes[i].normal(p),
-                    Surface::Emitter(_) => nearest.normal,
-                };
-                Intersection::Hit(Hit {
-                    t: nearest.t,
-                    p,
-                    n,
-                    surface,
-                })
-            }
-            None if nearest.exhausted => Intersection::Exhausted,
-            None => Intersection::Miss,
-        }
-    }
-
-    /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
-    #[inline]
-    fn trace_shape(
-        &self,
-        i: usize,
-        ray: &Ray,
-        t0: f32,
-        t1: f32,
-        spread: f32,
-        nearest: &mut Nearest,
-    ) {
-        let shape = &self.shapes[i];
-        let settings = TraceSettings {
-            spread,
-            ..self.shape_trace(shape)
-        };
-        match shape.trace(ray, t0, t1, &settings) {
-            ShapeTrace::Hit(t) if t < nearest.t => {
-                nearest.t = t;
-                nearest.surface = Some(Surface::Shape(i));
-            }
-            ShapeTrace::Exhausted(_) => nearest.exhausted = true,
-            _ => {}
-        }
     }
 
     /// The tracer's settings for `shape`: the scene's, with the tolerance floor raised to `RELATIVE_EPS`

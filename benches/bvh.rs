@@ -1,0 +1,94 @@
+//! Cost against the number of shapes: primal throughput of the default scene with its ball replaced by
+//! 1, 10, 100 and 1,000 random balls (`benches/scenes/many_balls.rs`; 256×256, 16 spp, `direct`), with
+//! the scene's bounding volume hierarchy and without it (every shape's bounds tested on every ray), in
+//! one run; then `diff` (the complete derivative of `ball0.radius`, default boundary budgets) against
+//! `render` at 1,000 balls.
+//!
+//! The machine is shared: medians and ratios. `cargo bench --bench bvh [-- REPS]` (default 3).
+
+#[path = "scenes/many_balls.rs"]
+mod many_balls;
+
+use implicit_psdr::integrator::{DiffOptions, RenderOptions, render, render_derivatives};
+use implicit_psdr::scene::{Scene, parse};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+fn scene(n: usize) -> Scene {
+    parse(&many_balls::many_balls(n, 1), Path::new(".")).expect("the generated scene parses")
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Median seconds of `reps` calls of `f` (after one untimed call).
+fn time(reps: usize, mut f: impl FnMut()) -> f64 {
+    f();
+    median(
+        (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    )
+}
+
+fn main() {
+    let reps: usize = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(3);
+    let options = RenderOptions {
+        spp: 16,
+        seed: 0,
+        progress: Default::default(),
+    };
+    println!("many balls, 256x256, 16 spp, direct, median of {reps} (M samples/s):");
+    println!("  balls   with BVH   without   speed-up");
+    let mut one = 0.0;
+    for n in [1, 10, 100, 1000] {
+        let with = scene(n);
+        let mut without = with.clone();
+        without.use_bvh = false;
+        let samples = (16 * 256 * 256) as f64;
+        let t_with = time(reps, || {
+            black_box(render(&with, &options));
+        });
+        // Without the hierarchy 1,000 balls take minutes: one timed render there.
+        let t_without = time(if n >= 1000 { 1 } else { reps }, || {
+            black_box(render(&without, &options));
+        });
+        let (a, b) = (samples / t_with / 1e6, samples / t_without / 1e6);
+        if n == 1 {
+            one = a;
+        }
+        println!(
+            "  {n:5}   {a:8.3}   {b:8.3}   {:6.1}x   (with BVH / 1 ball: {:.2})",
+            a / b,
+            a / one
+        );
+    }
+    let balls = scene(1000);
+    let selection = balls.select(&["ball0.radius"]).expect("ball0 exists");
+    let diff = DiffOptions {
+        render: options.clone(),
+        ..DiffOptions::default()
+    };
+    let t_render = time(reps, || {
+        black_box(render(&balls, &options));
+    });
+    let t_diff = time(reps, || {
+        black_box(render_derivatives(&balls, &selection, &diff).expect("diff runs"));
+    });
+    println!(
+        "1000 balls: render {:.1} ms, diff (ball0.radius, default budgets) {:.1} ms, ratio {:.2}",
+        t_render * 1e3,
+        t_diff * 1e3,
+        t_diff / t_render
+    );
+}

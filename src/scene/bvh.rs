@@ -1,0 +1,477 @@
+//! A bounding volume hierarchy over a scene's shapes, so that a ray tests the shapes whose bounds it
+//! passes near rather than every shape.
+//!
+//! Built once per scene ([`super::Scene::new`], which every change of a parameter goes through), over the
+//! bounds of the shapes with finite bounds, by binned surface-area heuristic (12 bins per axis, at most
+//! [`MAX_LEAF`] shapes per leaf). Shapes with unbounded (planes) or empty bounds are kept apart and
+//! tested on every ray, and so are shapes whose box is a large part of the whole scene's (a floor slab,
+//! a room): in the tree they would make every node above them as large.
+//!
+//! # What a node test guarantees
+//!
+//! A shape is traced over its bounds grown by the local tolerance where the ray enters them
+//! ([`super::Scene::trace_interval`]). A node is tested the same way (the same slab arithmetic, in the
+//! same order), over its box grown by the tolerance where the ray *leaves* the root's box (or at the
+//! ray's start if it leaves before): every shape's box lies inside the root's, so a ray enters or
+//! passes a shape no later than that, and the tolerance only grows along a ray. Each step of the slab
+//! test is monotone in the box and in the margin, rounding included, so the node's interval contains
+//! every one of its shapes' intervals, bit for bit: culling by node never drops a shape that the
+//! shape's own test would keep.
+//!
+//! # Order
+//!
+//! The nearest-hit query visits shapes in increasing order of where their interval starts (ties by
+//! shape index), from a priority queue of nodes and shapes, exactly as the brute-force query does over
+//! every shape: a shape's hit is sought over its interval cut at the nearest hit so far, so the order
+//! decides the intervals and, through the tracer's last step, the last bits of `t`. The same order makes
+//! the result the same with and without the hierarchy, bit for bit.
+
+use crate::math::{Aabb, Ray};
+use glam::Vec3A;
+
+/// Most shapes in a leaf.
+pub(crate) const MAX_LEAF: usize = 2;
+/// Shapes whose box has more than this fraction of the surface area of the box around every bounded
+/// shape are kept out of the hierarchy (tested on every ray).
+const LARGE: f32 = 0.25;
+/// Deepest level split (a leaf there holds whatever is left): bounds the build's recursion.
+const MAX_DEPTH: usize = 48;
+/// SAH bins per axis.
+const BINS: usize = 12;
+/// Relative cost of a node's box test against a shape's (the shape's is a box test too, and then maybe
+/// a trace).
+const NODE_COST: f32 = 1.0;
+
+/// One node: a box and either two children (`count == 0`, children `first` and `first + 1`) or a leaf
+/// of `count` shapes, `order[first .. first + count]`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Node {
+    pub bounds: Aabb,
+    pub first: u32,
+    pub count: u32,
+}
+
+/// The hierarchy over the shapes of a scene with finite bounds, and the shapes kept apart.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Bvh {
+    /// Node 0 is the root (absent when no shape has finite bounds).
+    pub(crate) nodes: Vec<Node>,
+    /// Shape indices, leaves referring to ranges of it.
+    pub(crate) order: Vec<u32>,
+    /// Shapes with unbounded or empty bounds, tested on every ray, in index order.
+    pub(crate) apart: Vec<u32>,
+    /// The bounds of every shape at build time, by index: the hierarchy is used only while the scene's
+    /// shapes have exactly these ([`Bvh::fits`]).
+    pub(crate) bounds: Vec<Aabb>,
+}
+
+impl Bvh {
+    /// The hierarchy over shapes with bounds `bounds` (indexed as the scene's shapes).
+    pub fn build(bounds: &[Aabb]) -> Self {
+        let bounded = |b: &Aabb| b.is_finite() && !b.is_empty();
+        let all = (bounds.iter().filter(|b| bounded(b))).fold(Aabb::EMPTY, |a, b| a.union(b));
+        // A shape whose box is a large part of everything's (a floor, a room's walls) would make
+        // every node above it as large: it is tested apart, on every ray.
+        let large = |b: &Aabb| area(b) > LARGE * area(&all);
+        let mut order = Vec::new();
+        let mut apart = Vec::new();
+        for (i, b) in bounds.iter().enumerate() {
+            if bounded(b) && !large(b) {
+                order.push(i as u32);
+            } else {
+                apart.push(i as u32);
+            }
+        }
+        let mut bvh = Self {
+            nodes: Vec::new(),
+            order,
+            apart,
+            bounds: bounds.to_vec(),
+        };
+        if !bvh.order.is_empty() {
+            let n = bvh.order.len() as u32;
+            bvh.nodes.push(Node {
+                bounds: Aabb::EMPTY,
+                first: 0,
+                count: n,
+            });
+            bvh.split(0, 0);
+        }
+        bvh
+    }
+
+    /// Whether the hierarchy was built for shapes with exactly these bounds (same count, same boxes).
+    pub fn fits<'a>(&self, mut bounds: impl ExactSizeIterator<Item = &'a Aabb>) -> bool {
+        bounds.len() == self.bounds.len() && self.bounds.iter().all(|b| bounds.next() == Some(b))
+    }
+
+    /// Number of shapes the hierarchy was built for.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.bounds.len()
+    }
+
+    /// Whether it was built for no shape.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.bounds.is_empty()
+    }
+
+    /// Sets node `k` (at depth `depth`)'s box from its shapes and splits it while the surface-area
+    /// heuristic gains, down to [`MAX_DEPTH`].
+    fn split(&mut self, k: usize, depth: usize) {
+        let Node { first, count, .. } = self.nodes[k];
+        let range = first as usize..(first + count) as usize;
+        let boxes = &self.bounds;
+        let bounds = self.order[range.clone()]
+            .iter()
+            .fold(Aabb::EMPTY, |a, &i| a.union(&boxes[i as usize]));
+        self.nodes[k].bounds = bounds;
+        if (count as usize) <= 1 || depth >= MAX_DEPTH {
+            return;
+        }
+        let centroid = |i: u32| boxes[i as usize].center();
+        let cb = self.order[range.clone()].iter().fold(Aabb::EMPTY, |a, &i| {
+            Aabb::new(a.min.min(centroid(i)), a.max.max(centroid(i)))
+        });
+        // The best split plane: (cost, axis, bin boundary).
+        let mut best: Option<(f32, usize, usize)> = None;
+        for axis in 0..3 {
+            let (lo, hi) = (cb.min[axis], cb.max[axis]);
+            if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+                continue;
+            }
+            let scale = BINS as f32 / (hi - lo);
+            let bin_of = |i: u32| (((centroid(i)[axis] - lo) * scale) as usize).min(BINS - 1);
+            let mut bins = [(Aabb::EMPTY, 0u32); BINS];
+            for &i in &self.order[range.clone()] {
+                let b = &mut bins[bin_of(i)];
+                b.0 = b.0.union(&boxes[i as usize]);
+                b.1 += 1;
+            }
+            // Sweep from the right, then from the left.
+            let mut right = [(0.0f32, 0u32); BINS];
+            let mut acc = (Aabb::EMPTY, 0u32);
+            for s in (1..BINS).rev() {
+                acc = (acc.0.union(&bins[s].0), acc.1 + bins[s].1);
+                right[s] = (area(&acc.0), acc.1);
+            }
+            let mut acc = (Aabb::EMPTY, 0u32);
+            for s in 1..BINS {
+                acc = (acc.0.union(&bins[s - 1].0), acc.1 + bins[s - 1].1);
+                let (ra, rn) = right[s];
+                if acc.1 == 0 || rn == 0 {
+                    continue;
+                }
+                let cost = area(&acc.0) * acc.1 as f32 + ra * rn as f32;
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, axis, s));
+                }
+            }
+        }
+        let leaf_cost = area(&bounds) * count as f32;
+        let Some((cost, axis, s)) = best else {
+            // Every centroid at one point: split in halves if the leaf is too large.
+            if (count as usize) > MAX_LEAF {
+                self.push_children(k, count / 2, depth);
+            }
+            return;
+        };
+        if (count as usize) <= MAX_LEAF && NODE_COST * area(&bounds) + cost >= leaf_cost {
+            return;
+        }
+        let (lo, hi) = (cb.min[axis], cb.max[axis]);
+        let scale = BINS as f32 / (hi - lo);
+        let slice = &mut self.order[range];
+        // Stable partition: the build does not depend on anything but the boxes and their indices.
+        let (mut left, mut right): (Vec<u32>, Vec<u32>) = slice
+            .iter()
+            .partition(|&&i| (((centroid(i)[axis] - lo) * scale) as usize).min(BINS - 1) < s);
+        let n_left = left.len() as u32;
+        left.append(&mut right);
+        slice.copy_from_slice(&left);
+        self.push_children(k, n_left, depth);
+    }
+
+    /// Makes node `k` an inner node with children of its first `n_left` shapes and the rest.
+    fn push_children(&mut self, k: usize, n_left: u32, depth: usize) {
+        let Node { first, count, .. } = self.nodes[k];
+        let c = self.nodes.len() as u32;
+        for (f, n) in [(first, n_left), (first + n_left, count - n_left)] {
+            self.nodes.push(Node {
+                bounds: Aabb::EMPTY,
+                first: f,
+                count: n,
+            });
+        }
+        self.nodes[k].first = c;
+        self.nodes[k].count = 0;
+        self.split(c as usize, depth + 1);
+        self.split(c as usize + 1, depth + 1);
+    }
+}
+
+/// Half the surface area of a box (0 for an empty one).
+#[inline]
+fn area(b: &Aabb) -> f32 {
+    if b.is_empty() {
+        return 0.0;
+    }
+    let e = b.extent();
+    e.x * e.y + e.y * e.z + e.z * e.x
+}
+
+/// A ray's slab-test data and the margin its node tests grow boxes by, computed once per query.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct RaySlabs {
+    o: Vec3A,
+    inv: Vec3A,
+    parallel: glam::BVec3A,
+    /// The margin: the tolerance where the ray leaves the root's box (or at its start if before).
+    r: f32,
+    /// `r / |d|` per axis the ray is not parallel to: how far the margin moves a slab's ends.
+    grow: Vec3A,
+}
+
+impl RaySlabs {
+    /// The slab data of `ray`, nodes grown by `margin(t)` at the `t` where the ray leaves `root` (the
+    /// box around every node) or `t_min` if before: at least the margin any shape inside gets
+    /// ([`super::Scene::trace_interval`] takes it where the ray enters or passes the shape's box, no
+    /// later than where it leaves the root's, and the margin only grows along a ray).
+    #[inline]
+    pub fn new(ray: &Ray, root: &Aabb, t_min: f32, margin: impl FnOnce(f32) -> f32) -> Self {
+        let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
+        let inv = d.recip();
+        let parallel = d.cmpeq(Vec3A::ZERO);
+        let (min, max) = (Vec3A::from(root.min), Vec3A::from(root.max));
+        let hi = Vec3A::select(
+            parallel,
+            Vec3A::INFINITY,
+            ((min - o) * inv).max((max - o) * inv),
+        );
+        let r = margin(hi.min_element().max(t_min));
+        Self {
+            o,
+            inv,
+            parallel,
+            r,
+            grow: Vec3A::select(parallel, Vec3A::ZERO, r * inv.abs()),
+        }
+    }
+
+    /// The interval of the ray in `[t_min, t_max]` within `b` grown by the ray's margin: the node
+    /// test (see the [module docs](self)), the same operations as [`Aabb::clip_with_margin`] with a
+    /// margin at least as large as any shape inside `b` gets.
+    #[inline]
+    pub fn node_interval(&self, b: &Aabb, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        let (min, max) = (Vec3A::from(b.min), Vec3A::from(b.max));
+        let ta = (min - self.o) * self.inv;
+        let tb = (max - self.o) * self.inv;
+        let lo = Vec3A::select(self.parallel, Vec3A::NEG_INFINITY, ta.min(tb));
+        let hi = Vec3A::select(self.parallel, Vec3A::INFINITY, ta.max(tb));
+        let r = Vec3A::splat(self.r);
+        let outside = self.o.cmplt(min - r) | self.o.cmpgt(max + r);
+        if (self.parallel & outside).any() {
+            return None;
+        }
+        let t0 = t_min.max((lo - self.grow).max_element());
+        let t1 = t_max.min((hi + self.grow).min_element());
+        (t0 <= t1).then_some((t0, t1))
+    }
+}
+
+/// An entry of the nearest-hit query's priority queue: a node or a shape, keyed by where its interval
+/// starts; nodes before shapes at equal starts, shapes by index.
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Entry {
+    pub t0: f32,
+    pub t1: f32,
+    /// `index` for a node, `SHAPE | index` for a shape.
+    pub tag: u32,
+}
+
+/// The bit of [`Entry::tag`] marking a shape.
+pub(crate) const SHAPE: u32 = 1 << 31;
+
+impl Entry {
+    #[inline]
+    pub fn before(&self, o: &Self) -> bool {
+        match self.t0.total_cmp(&o.t0) {
+            std::cmp::Ordering::Less => true,
+            std::cmp::Ordering::Greater => false,
+            std::cmp::Ordering::Equal => self.tag < o.tag,
+        }
+    }
+}
+
+/// A binary min-heap of [`Entry`]s on a reusable vector.
+#[derive(Debug, Default)]
+pub(crate) struct Queue {
+    heap: Vec<Entry>,
+}
+
+impl Queue {
+    #[inline]
+    pub fn clear(&mut self) {
+        self.heap.clear();
+    }
+
+    /// Whether `e` comes before every queued entry (it would be popped next).
+    #[inline]
+    pub fn comes_first(&self, e: &Entry) -> bool {
+        self.heap.first().is_none_or(|top| e.before(top))
+    }
+
+    #[inline]
+    pub fn push(&mut self, e: Entry) {
+        let h = &mut self.heap;
+        h.push(e);
+        let mut k = h.len() - 1;
+        while k > 0 {
+            let parent = (k - 1) / 2;
+            if !h[k].before(&h[parent]) {
+                break;
+            }
+            h.swap(k, parent);
+            k = parent;
+        }
+    }
+
+    #[inline]
+    pub fn pop(&mut self) -> Option<Entry> {
+        let h = &mut self.heap;
+        let last = h.pop()?;
+        if h.is_empty() {
+            return Some(last);
+        }
+        let top = std::mem::replace(&mut h[0], last);
+        let n = h.len();
+        let mut k = 0;
+        loop {
+            let (l, r) = (2 * k + 1, 2 * k + 2);
+            let mut m = k;
+            if l < n && h[l].before(&h[m]) {
+                m = l;
+            }
+            if r < n && h[r].before(&h[m]) {
+                m = r;
+            }
+            if m == k {
+                break;
+            }
+            h.swap(k, m);
+            k = m;
+        }
+        Some(top)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn boxes(n: usize, seed: u32) -> Vec<Aabb> {
+        let mut s = seed;
+        let mut u = move || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32
+        };
+        (0..n)
+            .map(|_| {
+                let c = Vec3::new(u(), u(), u()) * 20.0 - 10.0;
+                Aabb::around(c, Vec3::new(u(), u(), u()) * 0.5 + 0.01)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_finite_shape_is_in_one_leaf_inside_its_ancestors() {
+        let mut b = boxes(500, 7);
+        b[3] = Aabb::INFINITE;
+        b[9] = Aabb::EMPTY;
+        let bvh = Bvh::build(&b);
+        assert_eq!(bvh.apart, vec![3, 9]);
+        let mut seen = vec![0; b.len()];
+        let mut stack = vec![(0usize, Aabb::INFINITE)];
+        while let Some((k, parent)) = stack.pop() {
+            let n = bvh.nodes[k];
+            assert_eq!(
+                n.bounds.union(&parent),
+                parent,
+                "node {k} outside its parent"
+            );
+            if n.count == 0 {
+                stack.push((n.first as usize, n.bounds));
+                stack.push((n.first as usize + 1, n.bounds));
+            } else {
+                assert!(n.count as usize <= MAX_LEAF);
+                for &i in &bvh.order[n.first as usize..(n.first + n.count) as usize] {
+                    seen[i as usize] += 1;
+                    assert_eq!(b[i as usize].union(&n.bounds), n.bounds);
+                }
+            }
+        }
+        for (i, &s) in seen.iter().enumerate() {
+            assert_eq!(s, if i == 3 || i == 9 { 0 } else { 1 }, "shape {i}");
+        }
+        assert!(bvh.fits(b.iter()));
+        let mut moved = b.clone();
+        moved[0].max.x += 1.0;
+        assert!(!bvh.fits(moved.iter()));
+        assert!(!bvh.fits(b[1..].iter()));
+    }
+
+    #[test]
+    fn the_queue_pops_in_order_of_start_then_tag() {
+        let mut q = Queue::default();
+        let starts = [3.0, 1.0, 2.0, 1.0, 0.5, 2.0, 1.0];
+        let tags = [1, SHAPE | 4, 7, 2, SHAPE | 9, SHAPE | 1, SHAPE | 2];
+        for (&t0, &tag) in starts.iter().zip(&tags) {
+            q.push(Entry { t0, t1: t0, tag });
+        }
+        let mut got = Vec::new();
+        while let Some(e) = q.pop() {
+            got.push((e.t0, e.tag));
+        }
+        let mut want: Vec<(f32, u32)> = starts.iter().copied().zip(tags).collect();
+        want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn a_node_interval_holds_its_boxes_intervals() {
+        let b = boxes(64, 3);
+        let parent = b.iter().fold(Aabb::EMPTY, |a, x| a.union(x));
+        let margin = |t: f32| 1e-3 * (1.0 + t.abs());
+        let mut s = 11u32;
+        let mut u = move || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut kept = 0;
+        for k in 0..4000 {
+            let o = Vec3::new(u(), u(), u()) * 30.0;
+            let d = match k % 8 {
+                0 => Vec3::X,
+                1 => Vec3::NEG_Z,
+                // Aimed near a box: mostly kept, some grazing.
+                _ => (b[k % b.len()].center() + Vec3::new(u(), u(), u()) * 0.3 - o).normalize(),
+            };
+            let ray = Ray::new(o, d);
+            let slabs = RaySlabs::new(&ray, &parent, 0.0, margin);
+            let node = slabs.node_interval(&parent, 0.0, 50.0);
+            for child in &b {
+                if let Some((c0, c1)) = child.clip_with_margin(&ray, 0.0, 50.0, margin) {
+                    kept += 1;
+                    let (n0, n1) = node.expect("the node holds a kept child");
+                    assert!(
+                        n0 <= c0 && c1 <= n1,
+                        "ray {k}: child ({c0}, {c1}) node ({n0}, {n1})"
+                    );
+                }
+            }
+        }
+        assert!(kept > 200, "{kept}");
+    }
+}

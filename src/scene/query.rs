@@ -1,0 +1,350 @@
+//! Ray queries against a scene's shapes: the nearest hit and whether anything lies within a distance,
+//! through the scene's [`Bvh`] or, for few shapes, shape by shape.
+
+use super::bvh::{Entry, Queue, RaySlabs, SHAPE};
+use super::{Bvh, Hit, Intersection, Scene, Surface};
+use crate::math::Ray;
+use crate::trace::{ShapeTrace, TraceSettings};
+use std::cell::RefCell;
+use std::sync::Arc;
+
+/// The nearest surface found so far by [`Scene::intersect`].
+pub(super) struct Nearest {
+    t: f32,
+    surface: Option<Surface>,
+    /// Normal of an emitter hit (shape normals are computed once, for the final hit only).
+    normal: glam::Vec3,
+    exhausted: bool,
+}
+
+/// Scenes with at most this many shapes sort their intervals on the stack when not using the hierarchy.
+const MAX_SORTED_SHAPES: usize = 16;
+
+/// Scenes with more shapes than this use the hierarchy: below, testing every shape's bounds costs no
+/// more than walking a tree (and gives the same results).
+const MIN_BVH_SHAPES: usize = 4;
+
+/// Most levels of a hierarchy's any-hit walk kept on the stack; deeper walks spill to the heap.
+const STACK: usize = 64;
+
+thread_local! {
+    /// The nearest-hit query's priority queue, reused from ray to ray on each thread.
+    static QUEUE: RefCell<Queue> = RefCell::new(Queue::default());
+}
+
+impl Scene {
+    /// Rebuilds [`Scene::bvh`] from the shapes' current bounds: needed only after changing
+    /// [`Scene::shapes`] in place (every other change of the scene rebuilds it).
+    pub fn refresh_bvh(&mut self) {
+        let bounds: Vec<_> = self.shapes.iter().map(|s| s.bounds).collect();
+        if !self.bvh.fits(bounds.iter()) {
+            self.bvh = Arc::new(Bvh::build(&bounds));
+        }
+    }
+
+    /// The hierarchy, when the queries use it: switched on, built for as many shapes as the scene has,
+    /// and more than a few of them.
+    #[inline]
+    fn hierarchy(&self) -> Option<&Bvh> {
+        let n = self.shapes.len();
+        (self.use_bvh && n > MIN_BVH_SHAPES && self.bvh.len() == n).then_some(&*self.bvh)
+    }
+
+    /// The first surface hit by `ray` in `(0, t_max)`, resolving `spread`, skipping shape `leaving`.
+    ///
+    /// Shapes are traced in the order the ray enters their grown bounds (ties by index), each over its
+    /// interval cut at the nearest hit so far, so that a near hit cuts the intervals of the shapes behind
+    /// it (most of a floor's pixels never march through the object above it); the hierarchy visits
+    /// them in the same order ([`super::bvh`]), so the result is the same with it or without.
+    pub(super) fn nearest(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        spread: f32,
+        leaving: Option<usize>,
+    ) -> Intersection {
+        let mut nearest = Nearest {
+            t: t_max,
+            surface: None,
+            normal: glam::Vec3::ZERO,
+            exhausted: false,
+        };
+        for &i in &self.finite_emitters {
+            if let Some((t, n)) = self.emitters[i].emitter.intersect(ray, nearest.t) {
+                nearest = Nearest {
+                    t,
+                    surface: Some(Surface::Emitter(i)),
+                    normal: n,
+                    ..nearest
+                };
+            }
+        }
+        match self.hierarchy() {
+            Some(bvh) => self.nearest_in(bvh, ray, spread, leaving, &mut nearest),
+            None => self.nearest_each(ray, spread, leaving, &mut nearest),
+        }
+        match nearest.surface {
+            Some(surface) => {
+                let p = ray.at(nearest.t);
+                let n = match surface {
+                    Surface::Shape(i) => self.shapes[i].normal(p),
+                    Surface::Emitter(_) => nearest.normal,
+                };
+                Intersection::Hit(Hit {
+                    t: nearest.t,
+                    p,
+                    n,
+                    surface,
+                })
+            }
+            None if nearest.exhausted => Intersection::Exhausted,
+            None => Intersection::Miss,
+        }
+    }
+
+    /// [`Scene::nearest`]'s shapes, every one's bounds tested.
+    fn nearest_each(&self, ray: &Ray, spread: f32, leaving: Option<usize>, nearest: &mut Nearest) {
+        let t_max = nearest.t;
+        let intervals = (self.shapes.iter().enumerate())
+            .filter(|&(i, _)| Some(i) != leaving)
+            .filter_map(|(i, shape)| {
+                let (t0, t1) = self.trace_interval(shape, ray, t_max)?;
+                Some((t0, t1, i))
+            });
+        let mut trace = |sorted: &[(f32, f32, usize)]| {
+            for &(t0, t1, i) in sorted {
+                if t0 < nearest.t {
+                    self.trace_shape(i, ray, t0, t1.min(nearest.t), spread, nearest);
+                }
+            }
+        };
+        if self.shapes.len() <= MAX_SORTED_SHAPES {
+            // Insertion sort on the stack: stable, so ties keep the index order.
+            let mut sorted = [(0.0f32, 0.0f32, 0usize); MAX_SORTED_SHAPES];
+            let mut count = 0;
+            for (t0, t1, i) in intervals {
+                let mut k = count;
+                while k > 0 && sorted[k - 1].0 > t0 {
+                    sorted[k] = sorted[k - 1];
+                    k -= 1;
+                }
+                sorted[k] = (t0, t1, i);
+                count += 1;
+            }
+            trace(&sorted[..count]);
+        } else {
+            let mut sorted: Vec<_> = intervals.collect();
+            sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+            trace(&sorted);
+        }
+    }
+
+    /// [`Scene::nearest`]'s shapes through the hierarchy: a priority queue of nodes and shapes keyed by
+    /// where their intervals start, popped until the nearest start is beyond the nearest hit.
+    fn nearest_in(
+        &self,
+        bvh: &Bvh,
+        ray: &Ray,
+        spread: f32,
+        leaving: Option<usize>,
+        nearest: &mut Nearest,
+    ) {
+        // Shapes' intervals are clipped at the nearest emitter hit, as [`Scene::nearest_each`] clips
+        // them; nodes' at the nearest hit so far (a node beyond it holds no shape to trace).
+        let t_max = nearest.t;
+        let origin = ray.o.abs().max_element();
+        let margin = |entry: f32| self.trace.eps_at(origin + entry);
+        QUEUE.with(|queue| {
+            let mut queue = queue.borrow_mut();
+            queue.clear();
+            let push_shape = |queue: &mut Queue, i: u32| {
+                if Some(i as usize) == leaving {
+                    return;
+                }
+                if let Some((t0, t1)) = self.trace_interval(&self.shapes[i as usize], ray, t_max) {
+                    queue.push(Entry {
+                        t0,
+                        t1,
+                        tag: SHAPE | i,
+                    });
+                }
+            };
+            for &i in &bvh.apart {
+                push_shape(&mut queue, i);
+            }
+            let Some(root) = bvh.nodes.first() else {
+                while let Some(e) = queue.pop() {
+                    if e.t0.partial_cmp(&nearest.t) != Some(std::cmp::Ordering::Less) {
+                        break;
+                    }
+                    let i = (e.tag & !SHAPE) as usize;
+                    self.trace_shape(i, ray, e.t0, e.t1.min(nearest.t), spread, nearest);
+                }
+                return;
+            };
+            let slabs = RaySlabs::new(ray, &root.bounds, 0.0, margin);
+            // The entry being processed: popped, or a child that would be popped next.
+            let mut next = None;
+            if let Some((t0, t1)) = slabs.node_interval(&root.bounds, 0.0, t_max) {
+                queue.push(Entry { t0, t1, tag: 0 });
+            }
+            while let Some(e) = next.take().or_else(|| queue.pop()) {
+                // Nothing queued starts before this, and only shapes starting before the nearest hit
+                // are traced.
+                if e.t0.partial_cmp(&nearest.t) != Some(std::cmp::Ordering::Less) {
+                    break;
+                }
+                if e.tag & SHAPE != 0 {
+                    let i = (e.tag & !SHAPE) as usize;
+                    self.trace_shape(i, ray, e.t0, e.t1.min(nearest.t), spread, nearest);
+                    continue;
+                }
+                let node = bvh.nodes[e.tag as usize];
+                if node.count == 0 {
+                    let child = |c: u32| {
+                        let (t0, t1) =
+                            slabs.node_interval(&bvh.nodes[c as usize].bounds, 0.0, nearest.t)?;
+                        Some(Entry { t0, t1, tag: c })
+                    };
+                    let (a, b) = (child(node.first), child(node.first + 1));
+                    let (near, far) = match (a, b) {
+                        (Some(x), Some(y)) if y.before(&x) => (Some(y), Some(x)),
+                        (x, y) => (x.or(y), x.and(y)),
+                    };
+                    if let Some(far) = far {
+                        queue.push(far);
+                    }
+                    // The nearer child goes on at once when it would be popped next anyway.
+                    if let Some(near) = near {
+                        if queue.comes_first(&near) {
+                            next = Some(near);
+                        } else {
+                            queue.push(near);
+                        }
+                    }
+                } else {
+                    let range = node.first as usize..(node.first + node.count) as usize;
+                    for &i in &bvh.order[range] {
+                        push_shape(&mut queue, i);
+                    }
+                }
+            }
+        });
+    }
+
+    /// Traces shape `i` over `[t0, t1]` and keeps its hit if it is the nearest so far.
+    #[inline]
+    fn trace_shape(
+        &self,
+        i: usize,
+        ray: &Ray,
+        t0: f32,
+        t1: f32,
+        spread: f32,
+        nearest: &mut Nearest,
+    ) {
+        let shape = &self.shapes[i];
+        let settings = TraceSettings {
+            spread,
+            ..self.shape_trace(shape)
+        };
+        match shape.trace(ray, t0, t1, &settings) {
+            ShapeTrace::Hit(t) if t < nearest.t => {
+                nearest.t = t;
+                nearest.surface = Some(Surface::Shape(i));
+            }
+            ShapeTrace::Exhausted(_) => nearest.exhausted = true,
+            _ => {}
+        }
+    }
+
+    /// Whether some shape other than `leaving` crosses `ray` in `(0, t_max)`, each traced over its
+    /// bounds with its own tolerances, as [`Scene::intersect`] traces it (a shadow ray and a camera ray
+    /// along the same line agree on what they hit). Adds to `exhausted` the traces that ran out of
+    /// steps before the answer was known (they count as misses).
+    pub fn shapes_block(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaving: Option<usize>,
+        exhausted: &mut u64,
+    ) -> bool {
+        let blocks = |i: usize, exhausted: &mut u64| {
+            if Some(i) == leaving {
+                return false;
+            }
+            let shape = &self.shapes[i];
+            let Some((t0, t1)) = self.trace_interval(shape, ray, t_max) else {
+                return false;
+            };
+            match shape.trace(ray, t0, t1, &self.shape_trace(shape)) {
+                ShapeTrace::Hit(t) => t < t_max,
+                ShapeTrace::Exhausted(_) => {
+                    *exhausted += 1;
+                    false
+                }
+                ShapeTrace::Miss => false,
+            }
+        };
+        let Some(bvh) = self.hierarchy() else {
+            return (0..self.shapes.len()).any(|i| blocks(i, exhausted));
+        };
+        if bvh.apart.iter().any(|&i| blocks(i as usize, exhausted)) {
+            return true;
+        }
+        let Some(root) = bvh.nodes.first() else {
+            return false;
+        };
+        let origin = ray.o.abs().max_element();
+        let margin = |entry: f32| self.trace.eps_at(origin + entry);
+        let slabs = RaySlabs::new(ray, &root.bounds, 0.0, margin);
+        if slabs.node_interval(&root.bounds, 0.0, t_max).is_none() {
+            return false;
+        }
+        // Depth first, the nearer child first: an occluder near the start ends the walk early.
+        let mut stack = [0u32; STACK];
+        let mut spill = Vec::new();
+        let mut top = 1;
+        loop {
+            let k = if let Some(k) = spill.pop() {
+                k
+            } else if top > 0 {
+                top -= 1;
+                stack[top]
+            } else {
+                return false;
+            };
+            let node = bvh.nodes[k as usize];
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                if bvh.order[range]
+                    .iter()
+                    .any(|&i| blocks(i as usize, exhausted))
+                {
+                    return true;
+                }
+                continue;
+            }
+            let (a, b) = (node.first, node.first + 1);
+            let hit = |c: u32| {
+                let child = &bvh.nodes[c as usize].bounds;
+                slabs
+                    .node_interval(child, 0.0, t_max)
+                    .map(|(t0, _)| (t0, c))
+            };
+            let (near, far) = match (hit(a), hit(b)) {
+                (Some(x), Some(y)) if y.0 < x.0 => (Some(y), Some(x)),
+                (x, y) => (x.or(y), x.and(y)),
+            };
+            // Pushed far first, so the near child is popped next.
+            for (_, c) in [far, near].into_iter().flatten() {
+                if top < STACK {
+                    stack[top] = c;
+                    top += 1;
+                } else {
+                    spill.push(c);
+                }
+            }
+        }
+    }
+}

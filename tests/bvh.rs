@@ -1,0 +1,372 @@
+//! The scene's bounding volume hierarchy against testing every shape: the same nearest hit, bit for bit,
+//! and the same answer to "is anything in the way", on many random rays through random scenes of many
+//! shapes (hits, misses, grazes, rays starting on surfaces, successive hits along lines), near the
+//! origin and far from it; and the same image and derivative image of a scene of many balls.
+
+mod common;
+
+use glam::Vec3;
+use implicit_psdr::bsdf::Bsdf;
+use implicit_psdr::camera::Camera;
+use implicit_psdr::film::Filter;
+use implicit_psdr::integrator::{
+    DiffOptions, IntegratorKind, RenderOptions, render, render_derivatives,
+};
+use implicit_psdr::math::Ray;
+use implicit_psdr::scene::{Intersection, Scene, Shape, Surface};
+use implicit_psdr::sdf::Sdf;
+
+/// A small deterministic generator (SplitMix64) of uniform numbers in `[0, 1)`.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 40) as f32 / (1u32 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+    fn point(&mut self, half: f32) -> Vec3 {
+        Vec3::new(
+            self.range(-half, half),
+            self.range(-half, half),
+            self.range(-half, half),
+        )
+    }
+    fn direction(&mut self) -> Vec3 {
+        loop {
+            let v = self.point(1.0);
+            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
+fn diffuse() -> Bsdf {
+    Bsdf::Diffuse {
+        albedo: [0.6, 0.6, 0.6].into(),
+    }
+}
+
+/// `n` random shapes of many kinds (spheres, rounded and sharp boxes, tori, transformed cylinders,
+/// unions and smooth unions) in a cube of half-width 4 around `offset`, some overlapping, plus a floor
+/// plane when `plane`.
+fn random_scene(n: usize, seed: u64, offset: Vec3, plane: bool) -> Scene {
+    let mut rng = Rng(seed);
+    let mut shapes = Vec::new();
+    for i in 0..n {
+        let c = offset + rng.point(4.0);
+        let r = rng.range(0.05, 0.6);
+        let sdf = match i % 6 {
+            0 => Sdf::sphere(c.to_array(), r),
+            1 => Sdf::cuboid(c.to_array(), [r, 0.5 * r, 0.8 * r], 0.1 * r),
+            2 => Sdf::cuboid(c.to_array(), [0.7 * r, r, 0.3 * r], 0.0),
+            3 => Sdf::torus(c.to_array(), rng.direction(), r, 0.3 * r),
+            4 => Sdf::transform(
+                Sdf::cylinder([0.0; 3], Vec3::Y, r, 0.5 * r, 0.0),
+                c.to_array(),
+                rng.direction(),
+                rng.range(0.0, 90.0),
+                rng.range(0.5, 2.0),
+            ),
+            _ => {
+                let d = rng.direction() * r;
+                let pair = vec![
+                    Sdf::sphere((c - d).to_array(), 0.7 * r),
+                    Sdf::sphere((c + d).to_array(), 0.7 * r),
+                ];
+                if i % 12 == 5 {
+                    Sdf::Union(pair)
+                } else {
+                    Sdf::smooth_union(pair, 0.3 * r)
+                }
+            }
+        };
+        shapes.push(Shape::new(format!("s{i}"), sdf, diffuse()));
+    }
+    if plane {
+        shapes.push(Shape::new(
+            "floor",
+            Sdf::plane(Vec3::Y, offset.y - 4.5),
+            diffuse(),
+        ));
+    }
+    let camera = Camera::new(
+        offset + Vec3::new(0.0, 0.0, 12.0),
+        offset,
+        Vec3::Y,
+        40.0,
+        8,
+        8,
+        Filter::Tent,
+    );
+    Scene::new(camera, IntegratorKind::Direct, 1, shapes, vec![])
+}
+
+fn brute(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    s.use_bvh = false;
+    s
+}
+
+/// A point on or near the surface of a random shape: its bounds' centre, or a hit of a ray at it.
+fn aim(scene: &Scene, rng: &mut Rng) -> Vec3 {
+    let shape =
+        &scene.shapes[(rng.next() * scene.shapes.len() as f32) as usize % scene.shapes.len()];
+    let b = shape.bounds;
+    if b.is_finite() {
+        b.min + (b.max - b.min) * Vec3::new(rng.next(), rng.next(), rng.next())
+    } else {
+        rng.point(4.0)
+    }
+}
+
+/// Counts of what the compared queries met.
+#[derive(Debug, Default)]
+struct Met {
+    hits: usize,
+    misses: usize,
+    on_surface: usize,
+    blocked: usize,
+}
+
+/// The nearest hit along `ray` with and without the hierarchy: equal, bit for bit.
+fn same_nearest(
+    with: &Scene,
+    without: &Scene,
+    ray: &Ray,
+    t_max: f32,
+    leaving: Option<usize>,
+    what: &str,
+) -> Intersection {
+    let a = with.intersect_leaving(ray, t_max, leaving);
+    let b = without.intersect_leaving(ray, t_max, leaving);
+    assert_eq!(
+        a, b,
+        "{what}: ray {ray:?}, t_max {t_max}, leaving {leaving:?}"
+    );
+    let spread = 1e-3;
+    let (a, b) = (
+        with.intersect_resolving(ray, t_max, spread),
+        without.intersect_resolving(ray, t_max, spread),
+    );
+    assert_eq!(a, b, "{what} (camera ray): ray {ray:?}");
+    a
+}
+
+/// Random rays of every kind through `scene`, compared with and without the hierarchy.
+fn compare(scene: &Scene, rays: usize, seed: u64) -> Met {
+    let without = brute(scene);
+    let mut rng = Rng(seed);
+    let mut met = Met::default();
+    let centre = scene.camera.target.value();
+    let mut exhausted = (0u64, 0u64);
+    for k in 0..rays {
+        let o = centre + rng.point(7.0);
+        // Aimed at a shape's box (mostly hits), or anywhere (mostly misses).
+        let d = if k % 3 == 0 {
+            rng.direction()
+        } else {
+            (aim(scene, &mut rng) - o)
+                .try_normalize()
+                .unwrap_or(Vec3::X)
+        };
+        let ray = Ray::new(o, d);
+        let t_max = if k % 5 == 0 {
+            rng.range(0.5, 10.0)
+        } else {
+            f32::INFINITY
+        };
+        let first = same_nearest(scene, &without, &ray, t_max, None, "random");
+        let blocked = scene.shapes_block(&ray, t_max, None, &mut exhausted.0);
+        assert_eq!(
+            blocked,
+            without.shapes_block(&ray, t_max, None, &mut exhausted.1),
+            "occlusion: ray {ray:?} t_max {t_max}"
+        );
+        met.blocked += blocked as usize;
+        let Intersection::Hit(hit) = first else {
+            met.misses += 1;
+            continue;
+        };
+        met.hits += 1;
+        let Surface::Shape(i) = hit.surface else {
+            continue;
+        };
+        // Successive hits along the line, each ray starting exactly on the surface it met, both ways
+        // along the line: the tracer probes which side it leaves into.
+        let mut p = hit.p;
+        let mut from = i;
+        for _ in 0..6 {
+            met.on_surface += 1;
+            let n = scene.shapes[from].normal(p);
+            let back = Ray::new(p, -d);
+            let leaving = scene.leaving(from, n, -d);
+            same_nearest(
+                scene,
+                &without,
+                &back,
+                f32::INFINITY,
+                leaving,
+                "back along the line",
+            );
+            let leaving = scene.leaving(from, n, d);
+            let next = Ray::new(p, d);
+            match same_nearest(
+                scene,
+                &without,
+                &next,
+                f32::INFINITY,
+                leaving,
+                "along the line",
+            ) {
+                Intersection::Hit(h) => match h.surface {
+                    Surface::Shape(j) => {
+                        p = h.p;
+                        from = j;
+                    }
+                    Surface::Emitter(_) => break,
+                },
+                _ => break,
+            }
+        }
+        // Grazing: a ray through the hit point along the tangent plane, started off it, and a
+        // shadow-like ray leaving it (offset as the integrators offset it).
+        let n = scene.shapes[i].normal(hit.p);
+        let tangent = n.any_orthonormal_vector();
+        let graze = Ray::new(hit.p - 2.0 * tangent, tangent);
+        same_nearest(scene, &without, &graze, f32::INFINITY, None, "grazing");
+        let w = (n + rng.direction()).try_normalize().unwrap_or(n);
+        let o = scene.offset_origin(i, hit.p, n, w);
+        let leave = Ray::new(o, w);
+        let leaving = scene.leaving(i, n, w);
+        same_nearest(scene, &without, &leave, f32::INFINITY, leaving, "leaving");
+        assert_eq!(
+            scene.shapes_block(&leave, 5.0, leaving, &mut exhausted.0),
+            without.shapes_block(&leave, 5.0, leaving, &mut exhausted.1),
+            "occlusion leaving shape {i}: {leave:?}"
+        );
+    }
+    met
+}
+
+#[test]
+fn nearest_hits_and_occlusion_match_testing_every_shape() {
+    for (seed, n, plane) in [(1, 40, true), (2, 200, false), (3, 600, true), (4, 7, true)] {
+        let scene = random_scene(n, seed, Vec3::ZERO, plane);
+        let met = compare(&scene, 400, seed + 100);
+        // Each kind of query met enough cases to mean something.
+        assert!(
+            met.hits > 100 && met.misses > 20 && met.on_surface > 300 && met.blocked > 50,
+            "{n} shapes: {met:?}"
+        );
+    }
+}
+
+#[test]
+fn far_from_the_origin_the_hierarchy_still_keeps_every_shape() {
+    // At 10⁵ the local tolerance (16 ulps) is about 0.2: far larger than the floor of a shape's size,
+    // and growing along every ray; the node tests must grow with it.
+    for (seed, offset) in [
+        (5, Vec3::new(1e5, -3e4, 2e4)),
+        (6, Vec3::new(-4e3, 7e3, 1e4)),
+    ] {
+        let scene = random_scene(150, seed, offset, true);
+        let met = compare(&scene, 300, seed + 200);
+        assert!(met.hits > 50 && met.misses > 20, "{offset}: {met:?}");
+    }
+}
+
+/// `n` balls of radius 0.15 in a cube of half-width 1.5 above a box floor, under a rectangle light, 24×24.
+fn balls(n: usize) -> Scene {
+    let mut rng = Rng(9);
+    let mut shapes: Vec<Shape> = (0..n)
+        .map(|i| {
+            let c = rng.point(1.5);
+            Shape::new(
+                format!("ball{i}"),
+                Sdf::sphere(c.to_array(), 0.15),
+                diffuse(),
+            )
+        })
+        .collect();
+    shapes.push(Shape::new(
+        "floor",
+        Sdf::cuboid([0.0, -2.0, 0.0], [10.0, 0.5, 10.0], 0.25),
+        diffuse(),
+    ));
+    let json = r#"{"name": "light", "type": "rectangle", "center": [1.5, 4, 2], "normal": [0, -1, 0],
+        "u": [1, 0, 0], "size": [1, 1], "radiance": [40, 40, 40]}"#;
+    let light = common::deriv::scene_json(&format!(
+        r#"{{"camera": {{"origin": [0, 3, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45,
+              "width": 24, "height": 24}},
+            "integrator": {{"type": "direct"}}, "shapes": [], "emitters": [{json}]}}"#
+    ));
+    Scene::new(
+        light.camera.clone(),
+        IntegratorKind::Direct,
+        4,
+        shapes,
+        light.emitters.clone(),
+    )
+}
+
+#[test]
+fn a_scene_of_many_balls_renders_the_same_image_and_derivative_with_the_hierarchy() {
+    let with = balls(300);
+    assert!(with.bvh.len() == with.shapes.len());
+    let without = brute(&with);
+    let options = RenderOptions {
+        spp: 4,
+        seed: 3,
+        progress: Default::default(),
+    };
+    let (a, sa) = render(&with, &options);
+    let (b, sb) = render(&without, &options);
+    assert_eq!(a.rgb, b.rgb, "images differ");
+    assert_eq!(sa.exhausted_rays, sb.exhausted_rays);
+    let (mut w, mut wo) = (with.clone(), without.clone());
+    w.integrator = IntegratorKind::Path { max_depth: 3 };
+    wo.integrator = w.integrator;
+    assert_eq!(render(&w, &options).0.rgb, render(&wo, &options).0.rgb);
+    // The complete derivative: interior, silhouettes and shadows (their rays and tangent lines).
+    let selection = with.select(&["ball0.radius", "ball7.center.x"]).unwrap();
+    let diff = DiffOptions {
+        render: options.clone(),
+        ..DiffOptions::default()
+    };
+    let da = render_derivatives(&with, &selection, &diff).unwrap();
+    let db = render_derivatives(&without, &selection, &diff).unwrap();
+    assert_eq!(da.image.rgb, db.image.rgb);
+    for (x, y) in da.total().iter().zip(db.total()) {
+        assert_eq!(x.rgb, y.rgb, "derivative images differ");
+    }
+    // The images are not trivial: some pixels see balls.
+    assert!(a.rgb.iter().any(|&v| v > 0.0));
+}
+
+#[test]
+fn changing_shapes_in_place_and_refreshing_rebuilds_the_hierarchy() {
+    let mut scene = random_scene(50, 12, Vec3::ZERO, false);
+    let far = Shape::new("far", Sdf::sphere([0.0, 0.0, -30.0], 1.0), diffuse());
+    scene.shapes[3] = far;
+    scene.refresh_bvh();
+    let ray = Ray::new(Vec3::new(0.0, 0.0, -40.0), Vec3::Z);
+    match scene.intersect(&ray, f32::INFINITY) {
+        Intersection::Hit(h) => assert_eq!(h.surface, Surface::Shape(3)),
+        other => panic!("{other:?}"),
+    }
+    compare(&scene, 50, 13);
+    // A parameter change rebuilds it too.
+    let moved = scene.with_parameter("far.center.z", -20.0).unwrap();
+    match moved.intersect(&ray, f32::INFINITY) {
+        Intersection::Hit(h) => assert!((h.t - 19.0).abs() < 1e-3, "{h:?}"),
+        other => panic!("{other:?}"),
+    }
+}
