@@ -390,7 +390,8 @@ impl Context<'_> {
                     return Err(Error::field(
                         join(&path, "type"),
                         format!(
-                            "at most one environment emitter is allowed, {first} is one already"
+                            "at most one environment emitter (constant or envmap) is allowed, \
+                             {first} is one already"
                         ),
                     ));
                 }
@@ -516,7 +517,7 @@ impl Context<'_> {
                         after(node).map_err(|m| Error::field(o.at(key), m))?;
                     }
                 }
-                declare::Value::Rotation { axis, angle } => {
+                declare::Value::Rotation { axis, angle, .. } => {
                     let (a, degrees) = match o.get(key) {
                         None => (Vec3::Y, 0.0),
                         Some(r) => {
