@@ -38,6 +38,7 @@
 //! rebuilt in `f32` when the values change).
 
 use crate::math::Vec3;
+use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
 use crate::scalar::Scalar;
 use std::f32::consts::PI;
 use std::path::Path;
@@ -65,6 +66,9 @@ pub struct EnvMap {
     cell_pdf: Vec<f32>,
     /// Mean radiance over the sphere of directions.
     mean: [f32; 3],
+    /// Every texel has the same positive luminance: sampled uniformly over the sphere (the limit of
+    /// the tables as the cells shrink), exactly as the `constant` emitter samples.
+    uniform: bool,
 }
 
 impl EnvMap {
@@ -100,6 +104,7 @@ impl EnvMap {
             col_cdf: Vec::new(),
             cell_pdf: Vec::new(),
             mean: [0.0; 3],
+            uniform: false,
         };
         map.build_tables();
         Ok(map)
@@ -144,6 +149,12 @@ impl EnvMap {
         self.texels[row * self.width + column]
     }
 
+    /// Whether the map is sampled uniformly over the sphere (one luminance everywhere): its sampling
+    /// then does not depend on the map's rotation.
+    pub fn is_uniform(&self) -> bool {
+        self.uniform
+    }
+
     /// Mean radiance over the sphere of directions (solid-angle weighted).
     pub fn mean(&self) -> glam::Vec3 {
         self.mean.into()
@@ -184,6 +195,7 @@ impl EnvMap {
             }
         }
         self.mean = mean.map(|m| m as f32);
+        self.uniform = lum[0] > 0.0 && lum.iter().all(|&l| l == lum[0]);
         let total: f64 = weights.iter().sum();
         self.row_cdf = vec![0.0; h + 1];
         self.col_cdf = vec![0.0; (w + 1) * h];
@@ -263,10 +275,12 @@ impl EnvMap {
     /// A direction in the map's frame drawn from `u ∈ [0, 1)²` with its density per steradian; `None`
     /// for a black map and at a pole.
     pub fn sample(&self, u: glam::Vec2) -> Option<(glam::Vec3, f32)> {
+        if self.uniform {
+            return Some((uniform_sphere(u), UNIFORM_SPHERE_PDF));
+        }
         let (w, h) = (self.width, self.height);
         let (i, fv) = invert(&self.row_cdf, u.y as f64)?;
         let (j, fu) = invert(&self.col_cdf[i * (w + 1)..(i + 1) * (w + 1)], u.x as f64)?;
-        let pdf_uv = self.cell_pdf[i * w + j];
         let uu = ((j as f64 + fu) / w as f64) as f32;
         let vv = ((i as f64 + fv) / h as f64) as f32;
         let (sin_t, cos_t) = (vv * PI).sin_cos();
@@ -275,12 +289,18 @@ impl EnvMap {
             return None;
         }
         let d = glam::Vec3::new(sin_p * sin_t, cos_t, -cos_p * sin_t);
-        let pdf = pdf_uv / (2.0 * PI * PI * sin_t);
+        // The density of the cell drawn, unless `d` rounds into a neighbour: then the neighbour's,
+        // so that the density reported is always [`EnvMap::pdf`]'s (multiple importance sampling
+        // compares the two).
+        let pdf = self.pdf(d);
         (pdf > 0.0 && pdf.is_finite()).then_some((d, pdf))
     }
 
     /// Density per steradian of [`EnvMap::sample`] for the unit direction `d` (map frame).
     pub fn pdf(&self, d: glam::Vec3) -> f32 {
+        if self.uniform {
+            return UNIFORM_SPHERE_PDF;
+        }
         let sin_t = (d.x * d.x + d.z * d.z).sqrt();
         if sin_t < POLE_SIN {
             return 0.0;

@@ -496,8 +496,21 @@ impl Emitter {
                 map, axis, angle, ..
             } => {
                 let (local, pdf) = map.sample(u)?;
-                let wi = map_rotation::<f32>(*axis, angle, false).rotate(local.into());
-                let wi = glam::Vec3::from(wi).normalize();
+                // Uniform sampling is the same in every frame: drawn in the world's, as the
+                // constant emitter draws it. Otherwise the density is read back from the rotated
+                // direction, so that it is `pdf_li`'s to the bit (a direction rounded across a
+                // cell's edge takes the neighbour's density, as `pdf_li` does).
+                let (wi, pdf) = if map.is_uniform() || (angle.value == 0.0 && angle.slot.is_none())
+                {
+                    (local, pdf)
+                } else {
+                    let wi = map_rotation::<f32>(*axis, angle, false).rotate(local.into());
+                    let wi = glam::Vec3::from(wi).normalize();
+                    (wi, self.pdf_li(reference, wi, reference + wi, -wi))
+                };
+                if !(pdf > 0.0 && pdf.is_finite()) {
+                    return None;
+                }
                 Some(EmitterSample {
                     wi,
                     dist: f32::INFINITY,
