@@ -390,8 +390,7 @@ impl Context<'_> {
                     return Err(Error::field(
                         join(&path, "type"),
                         format!(
-                            "at most one environment emitter (constant or envmap) is allowed, \
-                             {first} is one already"
+                            "at most one environment emitter is allowed, {first} is one already"
                         ),
                     ));
                 }
