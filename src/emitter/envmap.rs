@@ -323,13 +323,13 @@ impl EnvMap {
 /// and the fraction of `u` through it; `None` when the table is all zero.
 fn invert(cdf: &[f64], u: f64) -> Option<(usize, f64)> {
     let n = cdf.len() - 1;
-    if !(cdf[n] > 0.0) {
+    if cdf[n] <= 0.0 || cdf[n].is_nan() {
         return None;
     }
     // First k with cdf[k + 1] > u: empty intervals (cdf[k] == cdf[k + 1]) are never chosen.
     let k = cdf[1..].partition_point(|&c| c <= u).min(n - 1);
     let (lo, hi) = (cdf[k], cdf[k + 1]);
-    if !(hi > lo) {
+    if hi <= lo || hi.is_nan() {
         return None;
     }
     Some((k, ((u - lo) / (hi - lo)).clamp(0.0, 1.0)))
