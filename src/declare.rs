@@ -179,12 +179,15 @@ pub enum Value<N: 'static> {
         after: Option<Check<N>>,
     },
     /// A rotation `{"axis": [x, y, z], "angle": degrees}`, by default none (the angle 0 about `+y`):
-    /// the angle is parameter `<prefix>.angle`, the axis a unit direction.
+    /// the angle is parameter `<prefix>.angle` (an sdf transform's) or `<prefix>.<key>.angle` (when
+    /// `keyed`: an environment map's), the axis a unit direction.
     Rotation {
         /// The unit axis.
         axis: Access<N, glam::Vec3>,
         /// The angle in degrees.
         angle: Access<N, Param>,
+        /// Whether the parameter's name holds the field's key.
+        keyed: bool,
     },
     /// One child node, with prefix `<prefix>.<key>` unless named.
     Child(Access<N, N>),
@@ -352,7 +355,9 @@ macro_rules! walks {
                             f(&format!("{prefix}.{key}.{c}"), p);
                         }
                     }
-                    Value::Rotation { angle, .. } => f(&format!("{prefix}.angle"), (angle.$get)(node)),
+                    Value::Rotation { angle, keyed, .. } => {
+                        f(&rotation_angle_name(prefix, key, *keyed), (angle.$get)(node))
+                    }
                     Value::Direction { .. }
                     | Value::Fixed { .. }
                     | Value::Child(_)
@@ -362,6 +367,15 @@ macro_rules! walks {
             }
         }
     };
+}
+
+/// The parameter name of a rotation's angle ([`Value::Rotation`]) under `prefix`.
+pub fn rotation_angle_name(prefix: &str, key: &str, keyed: bool) -> String {
+    if keyed {
+        format!("{prefix}.{key}.angle")
+    } else {
+        format!("{prefix}.angle")
+    }
 }
 
 walks!(walk, own_params, get, named);

@@ -12,7 +12,7 @@ use implicit_psdr::sdf::{GridData, Sdf, write_npy};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
-/// A fresh folder for one test, holding the grid file the grid kind's example names.
+/// A fresh folder for one test, holding the files the grid and envmap kinds' examples name.
 fn workdir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("psdr-declarations-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -27,6 +27,14 @@ fn workdir(test: &str) -> PathBuf {
         .collect();
     let grid = GridData::new([n, n, n], values, "test grid").unwrap();
     write_npy(&dir.join("example_grid.npy"), &grid).unwrap();
+    // The envmap kind's example: a 4 × 2 map with a brighter texel.
+    let plane = |v: f32| {
+        (0..8)
+            .map(|k| if k == 5 { 4.0 * v } else { v })
+            .collect::<Vec<f32>>()
+    };
+    let channels = [("R", 0.5), ("G", 0.6), ("B", 0.8)].map(|(n, v)| (n.to_string(), plane(v)));
+    implicit_psdr::io::write_exr(&dir.join("example_envmap.exr"), 4, 2, &channels).unwrap();
     dir
 }
 
@@ -97,7 +105,8 @@ fn declared_parameters<N>(kind: &Kind<N>, prefix: &str) -> Vec<String> {
             Value::Pair { .. } => PAIR
                 .iter()
                 .for_each(|c| out.push(format!("{prefix}.{key}.{c}"))),
-            Value::Rotation { .. } => out.push(format!("{prefix}.angle")),
+            Value::Rotation { keyed: false, .. } => out.push(format!("{prefix}.angle")),
+            Value::Rotation { keyed: true, .. } => out.push(format!("{prefix}.{key}.angle")),
             _ => {}
         }
     }

@@ -1,12 +1,20 @@
 //! The declarations of the emitter kinds ([`crate::declare`]): each kind's `type` name, fields, rules
 //! and example, in the order the scene file's errors list them.
 
-use super::Emitter;
+use super::{Emitter, EnvMap};
 use crate::declare::{Components, Family, Field, Kind, Rule, Value, on};
 use crate::scalar::{Param, Param3};
+use std::sync::Arc;
 
 /// Every emitter kind ([`crate::declare`]), in the order the scene file's errors list them.
-const KINDS: &[&Kind<Emitter>] = &[&RECTANGLE, &SPHERE, &CONSTANT, &POINT, &DIRECTIONAL];
+const KINDS: &[&Kind<Emitter>] = &[
+    &RECTANGLE,
+    &SPHERE,
+    &CONSTANT,
+    &ENVMAP,
+    &POINT,
+    &DIRECTIONAL,
+];
 
 impl Family for Emitter {
     fn kinds() -> &'static [&'static Kind<Emitter>] {
@@ -18,6 +26,7 @@ impl Family for Emitter {
             Emitter::Rectangle { .. } => &RECTANGLE,
             Emitter::Sphere { .. } => &SPHERE,
             Emitter::Constant { .. } => &CONSTANT,
+            Emitter::Envmap { .. } => &ENVMAP,
             Emitter::Point { .. } => &POINT,
             Emitter::Directional { .. } => &DIRECTIONAL,
         }
@@ -125,6 +134,50 @@ const CONSTANT: Kind<Emitter> = Kind {
     blank: || Emitter::Constant { radiance: zero3() },
     example: r#"{"type": "constant", "name": "example", "radiance": [0.3, 0.3, 0.3]}"#,
 };
+
+/// `{"type": "envmap", "name", "file", "scale" (default 1), "rotate": {"axis", "angle"} (default
+/// none)}`: radiance from a latitude–longitude RGB EXR ([`super::envmap`]), times `scale`, rotated
+/// from the map's frame into the world by `rotate`.
+const ENVMAP: Kind<Emitter> = Kind {
+    type_name: "envmap",
+    fields: &[
+        Field {
+            key: "file",
+            value: Value::File { load: load_envmap },
+        },
+        Field::number(
+            "scale",
+            on!(Emitter::Envmap { scale, .. } => scale),
+            Some(1.0),
+            Rule::NonNegative,
+        ),
+        Field {
+            key: "rotate",
+            value: Value::Rotation {
+                axis: on!(Emitter::Envmap { axis, .. } => axis),
+                angle: on!(Emitter::Envmap { angle, .. } => angle),
+                keyed: true,
+            },
+        },
+    ],
+    blank: || Emitter::Envmap {
+        map: Arc::new(EnvMap::uniform([0.0; 3]).expect("a black texel is valid")),
+        scale: Param::new(1.0),
+        axis: glam::Vec3::Y,
+        angle: Param::new(0.0),
+    },
+    example: r#"{"type": "envmap", "name": "example", "file": "example_envmap.exr", "scale": 0.8, "rotate": {"axis": [0, 1, 0], "angle": 30}}"#,
+};
+
+/// Reads an environment map's EXR into the node ([`EnvMap::read`]).
+fn load_envmap(node: &mut Emitter, file: &std::path::Path) -> Result<(), String> {
+    let map = EnvMap::read(file)?;
+    let Emitter::Envmap { map: slot, .. } = node else {
+        unreachable!("an envmap's file")
+    };
+    *slot = Arc::new(map);
+    Ok(())
+}
 
 /// `{"type": "point", "name", "position", "intensity"}`: a point light of radiant intensity
 /// `intensity` (W/sr) at `position`.

@@ -1,5 +1,5 @@
-//! Light sources: a one-sided rectangle, a sphere, a constant environment, and the delta lights (a
-//! point light and a directional sun, [`delta`]).
+//! Light sources: a one-sided rectangle, a sphere, a constant environment, an environment map
+//! ([`envmap`]), and the delta lights (a point light and a directional sun, [`delta`]).
 //!
 //! Everything that depends on the kind of emitter lives here (sampling, intersection, how a point on it
 //! moves with its parameters, its outline, the scene rules on its fields), so a new kind is added in
@@ -7,15 +7,18 @@
 //! declaration in `kinds.rs`.
 
 pub mod delta;
+pub mod envmap;
 mod kinds;
 
 pub use delta::Arrival;
+pub use envmap::EnvMap;
 
 use crate::error::{Error, FieldPath};
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
 use crate::math::{Aabb, Frame, Ray, Vec3};
 use crate::scalar::{Param, Param3, Scalar};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// An emitter. Finite emitters are also surfaces that block light and are seen by rays.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,6 +49,17 @@ pub enum Emitter {
     Constant {
         /// Radiance.
         radiance: Param3,
+    },
+    /// Radiance arriving from infinity, read from a latitude–longitude image ([`envmap`]).
+    Envmap {
+        /// The image and its sampling tables (shared: they do not change with the parameters).
+        map: Arc<EnvMap>,
+        /// Factor on the image's radiance (`>= 0`).
+        scale: Param,
+        /// Unit axis of the map-to-world rotation.
+        axis: glam::Vec3,
+        /// Angle of the map-to-world rotation, degrees (right-handed about `axis`).
+        angle: Param,
     },
     /// A point light (a delta light, [`delta`]): reached by shadow rays only.
     Point {
@@ -153,14 +167,25 @@ fn one_minus_cos_max(sin2: f32) -> f32 {
 }
 
 impl Emitter {
-    /// The emitted radiance; a point light's intensity, a sun's irradiance.
-    pub fn radiance(&self) -> &Param3 {
+    /// The emitted radiance; a point light's intensity, a sun's irradiance. `None` for an
+    /// environment map, whose radiance depends on the direction ([`Emitter::mean_radiance`]).
+    pub fn radiance(&self) -> Option<&Param3> {
         match self {
             Emitter::Rectangle { radiance, .. }
             | Emitter::Sphere { radiance, .. }
-            | Emitter::Constant { radiance } => radiance,
-            Emitter::Point { intensity, .. } => intensity,
-            Emitter::Directional { irradiance, .. } => irradiance,
+            | Emitter::Constant { radiance } => Some(radiance),
+            Emitter::Point { intensity, .. } => Some(intensity),
+            Emitter::Directional { irradiance, .. } => Some(irradiance),
+            Emitter::Envmap { .. } => None,
+        }
+    }
+
+    /// The radiance averaged over the emitter's directions (an environment map's mean over the
+    /// sphere times its scale; [`Emitter::radiance`]'s value for the others), at primal values.
+    pub fn mean_radiance(&self) -> glam::Vec3 {
+        match self {
+            Emitter::Envmap { map, scale, .. } => map.mean() * scale.value,
+            _ => self.radiance().map_or(glam::Vec3::ZERO, Param3::value),
         }
     }
 
@@ -184,7 +209,10 @@ impl Emitter {
                 center: center.value(),
                 radius: radius.value,
             }),
-            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
+            Emitter::Constant { .. }
+            | Emitter::Envmap { .. }
+            | Emitter::Point { .. }
+            | Emitter::Directional { .. } => None,
         }
     }
 
@@ -199,7 +227,9 @@ impl Emitter {
             }
             Emitter::Sphere { center, radius, .. } => center.c.iter().any(sel) || sel(radius),
             Emitter::Point { position, .. } => position.c.iter().any(sel),
-            Emitter::Constant { .. } | Emitter::Directional { .. } => false,
+            Emitter::Constant { .. } | Emitter::Envmap { .. } | Emitter::Directional { .. } => {
+                false
+            }
         }
     }
 
@@ -234,7 +264,7 @@ impl Emitter {
                 Some((x, r_s * r_s))
             }
             Emitter::Point { position, .. } => Some((position.get::<S>(), S::one())),
-            Emitter::Constant { .. } | Emitter::Directional { .. } => None,
+            Emitter::Constant { .. } | Emitter::Envmap { .. } | Emitter::Directional { .. } => None,
         }
     }
 
@@ -303,7 +333,7 @@ impl Emitter {
         match self {
             Emitter::Rectangle { size, .. } => size[0].value * size[1].value,
             Emitter::Sphere { radius, .. } => 4.0 * PI * radius.value * radius.value,
-            Emitter::Constant { .. } => f32::INFINITY,
+            Emitter::Constant { .. } | Emitter::Envmap { .. } => f32::INFINITY,
             Emitter::Point { .. } | Emitter::Directional { .. } => 0.0,
         }
     }
@@ -366,7 +396,10 @@ impl Emitter {
                 let n = (ray.at(t) - c).normalize_or_zero();
                 Some((t, n))
             }
-            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
+            Emitter::Constant { .. }
+            | Emitter::Envmap { .. }
+            | Emitter::Point { .. }
+            | Emitter::Directional { .. } => None,
         }
     }
 
@@ -378,6 +411,7 @@ impl Emitter {
     ///   uniform by area from inside.
     /// - Constant: uniform over the sphere of directions (`1 / 4π`): `sample_li` does not know the
     ///   surface normal, so it cannot favour the upper hemisphere.
+    /// - Environment map: by luminance times `sin θ` ([`envmap`]); `None` for a black map.
     /// - Delta lights: the one direction towards the light, `pdf` 1 standing for the delta
     ///   ([`delta`]).
     #[inline]
@@ -458,6 +492,33 @@ impl Emitter {
                     pdf: UNIFORM_SPHERE_PDF,
                 })
             }
+            Emitter::Envmap {
+                map, axis, angle, ..
+            } => {
+                let (local, pdf) = map.sample(u)?;
+                // Uniform sampling is the same in every frame: drawn in the world's, as the
+                // constant emitter draws it. Otherwise the density is read back from the rotated
+                // direction, so that it is `pdf_li`'s to the bit (a direction rounded across a
+                // cell's edge takes the neighbour's density, as `pdf_li` does).
+                let (wi, pdf) = if map.is_uniform() || (angle.value == 0.0 && angle.slot.is_none())
+                {
+                    (local, pdf)
+                } else {
+                    let wi = map_rotation::<f32>(*axis, angle, false).rotate(local.into());
+                    let wi = glam::Vec3::from(wi).normalize();
+                    (wi, self.pdf_li(reference, wi, reference + wi, -wi))
+                };
+                if !(pdf > 0.0 && pdf.is_finite()) {
+                    return None;
+                }
+                Some(EmitterSample {
+                    wi,
+                    dist: f32::INFINITY,
+                    p: reference + wi,
+                    n: -wi,
+                    pdf,
+                })
+            }
             Emitter::Point { .. } | Emitter::Directional { .. } => self.sample_delta_li(reference),
         }
     }
@@ -524,6 +585,12 @@ impl Emitter {
                 if pdf.is_finite() { pdf } else { 0.0 }
             }
             Emitter::Constant { .. } => UNIFORM_SPHERE_PDF,
+            Emitter::Envmap {
+                map, axis, angle, ..
+            } => {
+                let local = map_rotation::<f32>(*axis, angle, true).rotate(wi.into());
+                map.pdf(local.into())
+            }
             Emitter::Point { .. } | Emitter::Directional { .. } => 0.0,
         }
     }
@@ -532,11 +599,22 @@ impl Emitter {
     ///
     /// Finite emitters emit on the side of `n` only; the side test looks at primal values (its jump is a
     /// visibility-like discontinuity handled by boundary terms). Delta lights have no radiance
-    /// (their light is [`Emitter::delta_arrival`]).
+    /// (their light is [`Emitter::delta_arrival`]). The environment ignores `p` and `n`: its
+    /// radiance arrives from direction `−w` (an environment map looks it up there, rotated into the
+    /// map's frame with the lifted angle, times the lifted scale).
     #[inline]
     pub fn emitted<S: Scalar>(&self, p: Vec3<S>, n: Vec3<S>, w: Vec3<S>) -> Vec3<S> {
         let _ = p;
         match self {
+            Emitter::Envmap {
+                map,
+                scale,
+                axis,
+                angle,
+            } => {
+                let local = map_rotation::<S>(*axis, angle, true).rotate(-w);
+                map.eval(local) * scale.get::<S>()
+            }
             Emitter::Rectangle { radiance, .. } | Emitter::Sphere { radiance, .. } => {
                 if n.dot(w).primal() > 0.0 {
                     radiance.get::<S>()
@@ -567,12 +645,49 @@ impl Emitter {
                 center.value(),
                 glam::Vec3::splat(radius.value),
             )),
-            Emitter::Constant { .. } | Emitter::Point { .. } | Emitter::Directional { .. } => None,
+            Emitter::Constant { .. }
+            | Emitter::Envmap { .. }
+            | Emitter::Point { .. }
+            | Emitter::Directional { .. } => None,
         }
     }
-    /// True for the environment emitter: radiance arriving from infinity along every direction (the
-    /// sun, a delta light at infinity, is not one: see [`Emitter::is_delta`]).
+    /// True for the environment emitters (constant and map): radiance arriving from infinity along
+    /// every direction (the sun, a delta light at infinity, is not one: see [`Emitter::is_delta`]).
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Emitter::Constant { .. })
+        matches!(self, Emitter::Constant { .. } | Emitter::Envmap { .. })
+    }
+}
+
+/// An environment map's rotation (map to world; `inverse`: world to map) in the generic scalar, the
+/// angle lifted; the identity when the angle is 0 and not differentiated.
+#[inline]
+fn map_rotation<S: Scalar>(axis: glam::Vec3, angle: &Param, inverse: bool) -> MapRotation<S> {
+    if angle.value == 0.0 && angle.slot.is_none() {
+        return MapRotation { axis, trig: None };
+    }
+    let theta = angle.get::<S>() * (PI / 180.0);
+    let s = theta.sin();
+    MapRotation {
+        axis,
+        trig: Some((theta.cos(), if inverse { -s } else { s })),
+    }
+}
+
+/// A rotation about a unit axis by the angle of cosine and sine `trig` (`None`: the identity).
+struct MapRotation<S> {
+    axis: glam::Vec3,
+    trig: Option<(S, S)>,
+}
+
+impl<S: Scalar> MapRotation<S> {
+    /// `v` rotated (Rodrigues: `v c + (k × v) s + k (k·v)(1 − c)`).
+    #[inline]
+    fn rotate(&self, v: Vec3<S>) -> Vec3<S> {
+        let Some((c, s)) = self.trig else {
+            return v;
+        };
+        let k = Vec3::<S>::constant(self.axis);
+        let kv = v.dot_f32(self.axis) * (S::one() - c);
+        v * c + k.cross(v) * s + k * kv
     }
 }

@@ -604,7 +604,7 @@ impl Context<'_> {
                         after(node).map_err(|m| Error::field(o.at(key), m))?;
                     }
                 }
-                declare::Value::Rotation { axis, angle } => {
+                declare::Value::Rotation { axis, angle, .. } => {
                     let (a, degrees) = match o.get(key) {
                         None => (Vec3::Y, 0.0),
                         Some(r) => {

@@ -286,7 +286,9 @@ impl Walk<'_> {
                     ..
                 } => self.vector(o, key, p, components.names(), *default)?,
                 declare::Value::Pair { .. } => self.vector(o, key, p, &declare::PAIR, None)?,
-                declare::Value::Rotation { .. } => self.rotation_angle(o, key, p, path)?,
+                declare::Value::Rotation { keyed, .. } => {
+                    self.rotation_angle(o, key, p, path, *keyed)?
+                }
                 declare::Value::Child(_) => {
                     let child_path = format!("{path}.{key}");
                     let child = o
@@ -329,8 +331,9 @@ impl Walk<'_> {
         key: &str,
         p: &str,
         path: &str,
+        keyed: bool,
     ) -> Result<()> {
-        let name = format!("{p}.angle");
+        let name = declare::rotation_angle_name(p, key, keyed);
         let Some(v) = self.take(&name)? else {
             return Ok(());
         };

@@ -481,6 +481,7 @@ pub(super) mod kinds {
                 value: Value::Rotation {
                     axis: on!(Sdf::Transform { axis, .. } => axis),
                     angle: on!(Sdf::Transform { angle, .. } => angle),
+                    keyed: false,
                 },
             },
             Field::number(

@@ -296,7 +296,7 @@ impl DeltaShadows {
         let xd_s = attach.shape_vertex::<S>(d_idx, x_d, n_d).x;
         let h = shape.eval(emitter.ray_point(y_s, xd_s, depth_b));
         let v = -(h - h.detach()) / rate;
-        let power = emitter.radiance().value();
+        let power = emitter.mean_radiance();
         for cam in cams.iter() {
             // Δ = −W f I on the clear side (eq. (3)).
             let scale = -(cam.f * power) * (weight * cam.j_film);

@@ -239,7 +239,7 @@ fn interval(g: &Geometry, x_b: Vec3, t1: Vec3, t2: Vec3, n: Vec3) -> Option<Inte
 pub struct TangentSampler {
     /// Finite emitters with their luminance (empty for [`TangentSampling::Uniform`]).
     targets: Vec<(Geometry, f32)>,
-    /// `luminance · π` of the environment (0 without one).
+    /// `luminance · π` of the environment's mean radiance (0 without one).
     environment: f32,
 }
 
@@ -259,7 +259,7 @@ impl TangentSampler {
         if mode == TangentSampling::Steered {
             // Delta lights are at no point a tangent line could reach.
             for emitter in emitters.into_iter().filter(|e| !e.is_delta()) {
-                let l = luminance(emitter.radiance().value());
+                let l = luminance(emitter.mean_radiance());
                 match emitter.geometry() {
                     Some(g) if l > 0.0 => targets.push((g, l)),
                     Some(_) => {}
