@@ -63,8 +63,9 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
     }
     for node in &cfg.settings.grids {
         outln!(
-            "  {node}: every value of the grid, in {}",
-            out.join(format!("{node}.npy")).display()
+            "  {node}: every value of the grid, in {}; its shape's mesh in {}",
+            out.join(format!("{node}.npy")).display(),
+            out.join(format!("{node}.ply")).display()
         )?;
     }
     let rows = &outcome.rows;
@@ -85,6 +86,18 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         outln!(
             "  final metrics against the target scene: {}",
             metrics.join("; ")
+        )?;
+    }
+    if let (Some(last), Some(reference)) = (rows.last(), &cfg.reference_mesh)
+        && let Some(m) = &last.mesh
+    {
+        outln!(
+            "  final metrics against the reference mesh {}: Chamfer {:.4e} (of its box diagonal), \
+             normal consistency {:.4}, IoU {:.4}",
+            reference.path.display(),
+            m.chamfer,
+            m.normal_consistency,
+            m.iou
         )?;
     }
     let tail = &rows[rows.len() - rows.len().div_ceil(10)..];
