@@ -381,3 +381,35 @@ fn box_queries_are_exact() {
         assert!(w.abs() < 1e-9 || (w - 1.0).abs() < 1e-9, "{p}: {w}");
     }
 }
+
+/// The metrics on shapes whose distances are known: a sphere against a finer, larger sphere (every
+/// point of one is the radius difference from the other), a box against a shifted box (IoU in closed
+/// form), a mesh against itself.
+#[test]
+fn metrics_match_closed_forms() {
+    use implicit_psdr::mesh::metrics::{MetricOptions, compare};
+    let options = MetricOptions::default();
+    let (a, b) = (
+        uv_sphere(Vec3::ZERO, 1.0, 96, 48),
+        uv_sphere(Vec3::ZERO, 1.2, 192, 96),
+    );
+    let m = compare(&a, &b, &options).unwrap();
+    let diagonal = 2.4 * 3f64.sqrt();
+    // The tessellations' sagittas (5e-4 and 1.6e-4 of the radius) bound the departure from 0.2.
+    assert!((m.chamfer * diagonal - 0.2).abs() < 1e-3, "{m:?}");
+    assert!(m.normal_consistency > 0.999, "{m:?}");
+    // IoU (1/1.2)³ to a cell's share of the surface (64 cells across 2.4).
+    assert!((m.iou - (1.0 / 1.2f64).powi(3)).abs() < 0.02, "{m:?}");
+
+    let box_a = cuboid(Vec3::ZERO, Vec3::ONE);
+    let box_b = cuboid(Vec3::new(0.25, 0.0, 0.0), Vec3::new(1.25, 1.0, 1.0));
+    let m = compare(&box_a, &box_b, &options).unwrap();
+    // Overlap 0.75, union 1.25: 0.6, to the lattice's cells (1.25/64 wide: each face at x is
+    // placed to within half a cell, so the lengths to within 0.02 and the ratio to within 0.02).
+    assert!((m.iou - 0.6).abs() < 0.02, "{m:?}");
+    let same = compare(&box_a, &box_a, &options).unwrap();
+    assert!(
+        same.chamfer < 1e-7 && same.iou == 1.0 && same.normal_consistency > 0.999,
+        "{same:?}"
+    );
+}
