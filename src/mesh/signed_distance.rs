@@ -88,7 +88,12 @@ impl MeshSdf {
     /// over `[lo, hi]`, the first and last on the box's faces, `x` fastest: exact distances, signs
     /// from the winding number evaluated as [`MeshSdf::insides`] says. In parallel over `z` slices.
     pub fn sample(&self, lo: Vec3, hi: Vec3, res: usize) -> GridData {
-        let dims = bake_dims(lo, hi, res);
+        self.sample_dims(lo, hi, bake_dims(lo, hi, res))
+    }
+
+    /// [`MeshSdf::sample`] with `dims` samples per axis (each at least 2).
+    pub fn sample_dims(&self, lo: Vec3, hi: Vec3, dims: [usize; 3]) -> GridData {
+        let dims = dims.map(|n| n.max(2));
         let lattice = Lattice::new(lo, hi, dims);
         let distances = self.distances(&lattice);
         let inside = self.insides(&lattice, &distances);
