@@ -86,7 +86,7 @@ impl Measured {
             total += 0.5 * (b - a).cross(c - a).length();
             cdf.push(total);
         }
-        if !(total > 0.0) {
+        if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::Unsupported("the mesh has no area".into()));
         }
         Ok(Self {
@@ -166,7 +166,7 @@ pub fn compare_prepared(
     options: &MetricOptions,
 ) -> Result<MeshMetrics> {
     let diagonal = reference.bounds().extent().length() as f64;
-    if !(diagonal > 0.0) {
+    if diagonal.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::Unsupported(
             "the reference mesh's bounding box has no diagonal".into(),
         ));

@@ -248,7 +248,9 @@ impl Lattice {
 /// a box with no volume (a flat mesh without padding, or a single point).
 pub fn padded_box(bounds: Aabb, padding: f32) -> Result<Aabb> {
     let padded = bounds.expanded(padding * bounds.extent().max_element());
-    if !(padded.extent().min_element() > 0.0) || !padded.is_finite() {
+    if padded.extent().min_element().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        || !padded.is_finite()
+    {
         return Err(Error::Unsupported(format!(
             "the mesh's box {:?} to {:?} (padded by {padding} of its longest edge) has no volume; \
              use a padding > 0",

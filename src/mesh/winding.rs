@@ -119,8 +119,7 @@ impl Winding {
 fn far_field(m: &Moments, y: DVec3, d2: f64) -> f64 {
     let d = d2.sqrt();
     let inv3 = 1.0 / (d2 * d);
-    let first = y.dot(m.area) * inv3;
-    first
+    y.dot(m.area) * inv3
 }
 
 /// The signed solid angle of triangle `t` seen from `q` (Van Oosterom and Strackee 1983): positive

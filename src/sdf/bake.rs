@@ -90,7 +90,7 @@ pub fn bake_padded_by(sdf: &Sdf, res: usize, padding: f32, what: &str) -> crate:
         )));
     }
     let padded = local.expanded(padding * local.extent().max_element());
-    if !(padded.extent().min_element() > 0.0) {
+    if padded.extent().min_element().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(crate::Error::Unsupported(format!(
             "{what}'s box has no volume with padding {padding}; use a padding > 0"
         )));
