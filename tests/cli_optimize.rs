@@ -88,7 +88,12 @@ fn progress(path: &Path) -> Vec<Vec<f64>> {
         ",loss_pass_seconds,interior_seconds,primary_seconds,secondary_seconds,grid_edit_seconds";
     assert!(
         header == format!("iteration,loss,seconds,gradient_norm{timing}")
-            || header == format!("iteration,loss,seconds,gradient_norm,iou,chamfer{timing}"),
+            || header == format!("iteration,loss,seconds,gradient_norm,iou,chamfer{timing}")
+            || header
+                == format!(
+                    "iteration,loss,seconds,gradient_norm,mesh_chamfer,mesh_normal_consistency,\
+                     mesh_iou{timing}"
+                ),
         "{header}"
     );
     lines
@@ -364,6 +369,47 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
     assert!(row[5] > 0.05 && row[5] < 0.15, "Chamfer {}", row[5]);
     // loss.png gains the IoU panel below the loss.
     assert_eq!(png_size(&dir.join("shape/loss.png")), (640, 600));
+
+    // A reference mesh (a sphere of radius 0.6, as the target): three more columns, and the grid's
+    // mesh beside its values and beside each snapshot.
+    let sphere = implicit_psdr::mesh::shapes::uv_sphere(glam::Vec3::ZERO, 0.6, 48, 24);
+    implicit_psdr::io::write_mesh(&dir.join("ref.obj"), &sphere).unwrap();
+    let mut with_mesh = plain.clone();
+    with_mesh["reference_mesh"] = json!("ref.obj");
+    with_mesh["iterations"] = json!(2);
+    with_mesh["snapshot_every"] = json!(1);
+    write_json(&dir.join("with_mesh.json"), &with_mesh);
+    let stdout = assert_success(&run(&dir, &["optimize", "with_mesh.json", "--out", "mesh"]));
+    assert!(
+        stdout.contains("final metrics against the reference mesh"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(dir.join("mesh/progress.csv")).unwrap();
+    assert!(
+        text.starts_with(
+            "iteration,loss,seconds,gradient_norm,mesh_chamfer,mesh_normal_consistency,mesh_iou,"
+        ),
+        "{text}"
+    );
+    let rows = progress(&dir.join("mesh/progress.csv"));
+    assert_eq!(rows.len(), 2);
+    // As above: a sphere of radius about 0.5 against 0.6: Chamfer about 0.1 of the reference's
+    // diagonal 1.2 √3 (0.05), normals alike, IoU near 0.58.
+    let (chamfer, normals, iou) = (rows[0][4], rows[0][5], rows[0][6]);
+    assert!(chamfer > 0.025 && chamfer < 0.075, "Chamfer {chamfer}");
+    assert!(
+        normals > 0.95 && normals <= 1.0,
+        "normal consistency {normals}"
+    );
+    assert!(iou > 0.45 && iou < 0.7, "IoU {iou}");
+    for ply in ["mesh/blob.ply", "mesh/snapshots/blob_00001.ply"] {
+        let mesh = implicit_psdr::io::read_mesh(&dir.join(ply)).unwrap();
+        assert!(
+            mesh.faces.len() > 100 && mesh.volume() > 0.2,
+            "{ply}: {}",
+            mesh.volume()
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -18,6 +18,8 @@ seed 0, the differentiable pixel normalisation, the default boundary budgets):
 - ``bake(scene, shape, res)``: a shape's SDF sampled into a grid, ``(values, grid node)``;
 - ``extract_mesh(scene, shape, res=128)``: a shape's surface as ``(vertices, faces)`` arrays, the
   mesh the ``mesh`` command writes;
+- ``mesh_to_grid(vertices, faces, res=64, bbox=None)``: a triangle mesh's signed distance on a
+  ``res``³ lattice, ``(values, bbox_min, bbox_max)``, as ``bake --mesh`` computes it;
 - ``read_exr(path)``: the channels of an EXR the tool wrote; ``write_exr(path, channels)`` writes
   them (``write_exr(path, diff(...))`` writes ``diff``'s channels).
 
@@ -37,6 +39,7 @@ from ._native import (
     bake,
     diff,
     extract_mesh,
+    mesh_to_grid,
     fd,
     grad,
     optimize,
@@ -51,6 +54,7 @@ __all__ = [
     "bake",
     "diff",
     "extract_mesh",
+    "mesh_to_grid",
     "fd",
     "grad",
     "optimize",

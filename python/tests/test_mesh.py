@@ -47,3 +47,45 @@ def test_bad_requests_raise(small):
         ip.extract_mesh(scene, "nothing")
     with pytest.raises(ValueError, match="res"):
         ip.extract_mesh(scene, "can", res=2)
+
+
+def cube_mesh(lo, hi):
+    """The box [lo, hi] as 12 triangles facing outwards."""
+    lo, hi = np.asarray(lo, dtype=np.float32), np.asarray(hi, dtype=np.float32)
+    v = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2]]
+                  for i in range(8)], dtype=np.float32)
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    faces = np.array([t for q in quads for t in ([q[0], q[1], q[2]], [q[0], q[2], q[3]])])
+    return v, faces
+
+
+def test_mesh_to_grid_is_a_box_s_signed_distance():
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([1.0, 2.0, 1.5])
+    v, f = cube_mesh(lo, hi)
+    values, bmin, bmax = ip.mesh_to_grid(v, f, res=20, bbox=((-0.5, -0.5, -0.5), (1.5, 2.5, 2.0)))
+    assert values.shape == (20, 20, 20) and values.dtype == np.float32
+    np.testing.assert_allclose(bmin, [-0.5, -0.5, -0.5])
+    np.testing.assert_allclose(bmax, [1.5, 2.5, 2.0])
+    # The box's signed distance in closed form at every sample ([z, y, x] order).
+    axes = [np.linspace(bmin[k], bmax[k], 20) for k in range(3)]
+    z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    p = np.stack([x, y, z], axis=-1)
+    q = np.abs(p - (lo + hi) / 2) - (hi - lo) / 2
+    want = np.linalg.norm(np.maximum(q, 0), axis=-1) + np.minimum(q.max(axis=-1), 0)
+    np.testing.assert_allclose(values, want, atol=1e-5)
+
+
+def test_mesh_to_grid_default_box_is_a_padded_cube_and_bad_meshes_raise():
+    v, f = cube_mesh([0, 0, 0], [1, 2, 1])
+    values, bmin, bmax = ip.mesh_to_grid(v, f.astype(np.int32), res=8)
+    assert values.shape == (8, 8, 8)
+    np.testing.assert_allclose(bmax - bmin, [2.4, 2.4, 2.4], rtol=1e-6)
+    np.testing.assert_allclose((bmin + bmax) / 2, [0.5, 1.0, 0.5], atol=1e-6)
+    with pytest.raises(ValueError, match="out of range"):
+        ip.mesh_to_grid(v, f + 8, res=8)
+    bad = v.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="not finite"):
+        ip.mesh_to_grid(bad, f, res=8)
+    with pytest.raises(ValueError, match="no faces"):
+        ip.mesh_to_grid(v, np.zeros((0, 3), dtype=np.int64), res=8)

@@ -52,8 +52,8 @@ pub(crate) enum Command {
         #[command(flatten)]
         outputs: OutputArgs,
     },
-    /// Sample one shape's SDF over its bounds (padded) into a grid and write it as a float32 .npy of
-    /// shape [nz, ny, nx].
+    /// Sample one shape's SDF, or a triangle mesh's signed distance (--mesh), over its bounds (padded)
+    /// into a grid and write it as a float32 .npy of shape [nz, ny, nx].
     Bake(BakeArgs),
     /// Extract one shape's surface (a grid's at its level) as a closed triangle mesh by dual
     /// contouring (sharp edges kept sharp, vertices on the surface, normals from the gradient), in
@@ -104,18 +104,30 @@ pub(crate) enum Command {
 }
 
 #[derive(Args, Debug)]
+#[command(group(ArgGroup::new("source").required(true).args(["scene", "mesh"])))]
 pub(crate) struct BakeArgs {
-    /// The scene file holding the shape.
-    pub(crate) scene: PathBuf,
+    /// The scene file holding the shape (with --shape).
+    #[arg(requires = "shape")]
+    pub(crate) scene: Option<PathBuf>,
     /// Name of the shape to bake.
-    #[arg(long)]
-    pub(crate) shape: String,
+    #[arg(long, requires = "scene")]
+    pub(crate) shape: Option<String>,
+    /// Bake a triangle mesh instead of a shape: its signed distance (exact distance to the
+    /// triangles; inside where the generalised winding number is at least 1/2), from a .obj, .ply,
+    /// .stl or .off file.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["scene", "shape"])]
+    pub(crate) mesh: Option<PathBuf>,
     /// Samples along the longest edge of the box (4 to 512); the other axes get near-cubic cells.
     #[arg(long, value_parser = clap::value_parser!(u32).range(4..=512))]
     pub(crate) res: u32,
     /// Output .npy file.
     #[arg(long)]
     pub(crate) out: PathBuf,
+    /// The box's margin on every side, as a fraction of the longest edge of the shape's (or mesh's)
+    /// bounds (a number >= 0).
+    #[arg(long, value_name = "P", default_value_t = crate::sdf::BAKE_PADDING,
+          allow_negative_numbers = true, value_parser = non_negative_f32)]
+    pub(crate) padding: f32,
 }
 
 #[derive(Args, Debug)]
@@ -289,6 +301,14 @@ pub(crate) fn positive_f64(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a finite number > 0, got {text:?}")),
+    }
+}
+
+/// A finite number >= 0.
+pub(crate) fn non_negative_f32(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a finite number >= 0, got {text:?}")),
     }
 }
 

@@ -65,14 +65,16 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         }
     }
     for node in &cfg.settings.grids {
-        let what = if cfg.scene.texture_range(node).is_some() {
-            "every texel of the volume texture"
+        let (what, mesh) = if cfg.scene.texture_range(node).is_some() {
+            ("every texel of the volume texture", String::new())
         } else {
-            "every value of the grid"
+            let ply = out.join(format!("{node}.ply"));
+            ("every value of the grid", format!("; its shape's mesh in {}", ply.display()))
         };
         outln!(
-            "  {node}: {what}, in {}",
-            out.join(format!("{node}.npy")).display()
+            "  {node}: {what}, in {}{}",
+            out.join(format!("{node}.npy")).display(),
+            mesh
         )?;
     }
     let rows = &outcome.rows;
@@ -93,6 +95,18 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         outln!(
             "  final metrics against the target scene: {}",
             metrics.join("; ")
+        )?;
+    }
+    if let (Some(last), Some(reference)) = (rows.last(), &cfg.reference_mesh)
+        && let Some(m) = &last.mesh
+    {
+        outln!(
+            "  final metrics against the reference mesh {}: Chamfer {:.4e} (of its box diagonal), \
+             normal consistency {:.4}, IoU {:.4}",
+            reference.path.display(),
+            m.chamfer,
+            m.normal_consistency,
+            m.iou
         )?;
     }
     let tail = &rows[rows.len() - rows.len().div_ceil(10)..];

@@ -16,8 +16,8 @@ pub const MESH_EXTENSIONS: [&str; 2] = ["ply", "obj"];
 /// extension, a write failure (naming the file).
 pub fn write_mesh(path: &Path, mesh: &TriangleMesh) -> Result<()> {
     let bytes = match extension(path).as_deref() {
-        Some("ply") => ply_bytes(mesh),
         Some("obj") => obj_text(mesh).into_bytes(),
+        Some("ply") => ply_bytes(mesh),
         _ => {
             return Err(Error::file(path, "a mesh file must end in .ply or .obj"));
         }
@@ -33,7 +33,8 @@ fn extension(path: &Path) -> Option<String> {
     Some(path.extension()?.to_str()?.to_ascii_lowercase())
 }
 
-fn ply_bytes(mesh: &TriangleMesh) -> Vec<u8> {
+/// The bytes of `mesh` as a binary PLY file (what [`write_mesh`] writes to a `.ply`).
+pub fn ply_bytes(mesh: &TriangleMesh) -> Vec<u8> {
     let header = format!(
         "ply\nformat binary_little_endian 1.0\ncomment implicit-psdr\nelement vertex {}\n\
          property float x\nproperty float y\nproperty float z\n\

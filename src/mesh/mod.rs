@@ -1,14 +1,25 @@
-//! Triangle meshes out of the scene's shapes: a shape's surface extracted by dual contouring
-//! ([`contour`]), with sharp edges kept sharp, vertices on the zero set and normals from the
-//! gradient. Files are written by [`crate::io::write_mesh`].
+//! Triangle meshes out of the scene's shapes and into grids. Out: a shape's surface extracted by dual
+//! contouring ([`contour`]), with sharp edges kept sharp, vertices on the zero set and normals from
+//! the gradient; files are written by [`crate::io::write_mesh`]. In: a mesh read by
+//! [`crate::io::read_mesh`] has a signed distance ([`signed_distance`]: exact distances through a
+//! BVH, [`bvh`], and the inside from the generalised winding number, [`winding`]) that
+//! [`bake_mesh`] samples for a `grid` node. [`metrics`] compares two meshes (Chamfer distance,
+//! normal consistency, IoU).
 //!
 //! The mesh is closed (every edge on an even number of triangles). As with every dual contouring with
 //! one vertex per cell, a lattice face whose corners alternate in sign (a sharp edge crossing it
 //! diagonally) gives an edge shared by four triangles: the surface touches itself along it, a few in
 //! ten thousand edges of a rotated box at 64³ ([`TriangleMesh::non_manifold_edges`]).
 
+pub mod bvh;
 pub mod contour;
+pub mod metrics;
 mod qef;
+pub mod shapes;
+pub mod signed_distance;
+pub mod winding;
+
+pub use signed_distance::{MeshSdf, bake_mesh};
 
 use crate::error::{Error, Result};
 use crate::scene::Shape;
@@ -82,6 +93,20 @@ impl TriangleMesh {
         (self.faces.iter())
             .map(|f| p(f[0]).dot(p(f[1]).cross(p(f[2]))) / 6.0)
             .sum()
+    }
+
+    /// Unit normal per vertex: the sum of the area vectors of the triangles around it, normalised
+    /// (zero where they cancel or no triangle uses the vertex).
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut sums = vec![Vec3::ZERO; self.vertices.len()];
+        for f in &self.faces {
+            let p = f.map(|i| self.vertices[i as usize]);
+            let area = (p[1] - p[0]).cross(p[2] - p[0]);
+            for i in f {
+                sums[*i as usize] += area;
+            }
+        }
+        sums.into_iter().map(Vec3::normalize_or_zero).collect()
     }
 
     /// The mesh moved by `offset`.

@@ -44,6 +44,7 @@ const FIELDS: &[&str] = &[
     "redistance_every",
     "laplacian",
     "terms",
+    "reference_mesh",
 ];
 const LOSSES: &[&str] = &["l2", "l1"];
 const TERMS: &[&str] = &["complete", "interior"];
@@ -89,6 +90,17 @@ pub struct OptimizeConfig {
     pub target_spp: u32,
     /// Write a snapshot of the views every this many iterations (`None`: only at the end).
     pub snapshot_every: Option<u32>,
+    /// The mesh that the optimised shapes are measured against every iteration (`reference_mesh`).
+    pub reference_mesh: Option<ReferenceMesh>,
+}
+
+/// `reference_mesh`: a triangle mesh in the scene's coordinates, read and checked.
+#[derive(Clone, Debug)]
+pub struct ReferenceMesh {
+    /// The file.
+    pub path: PathBuf,
+    /// Its triangles.
+    pub mesh: crate::mesh::TriangleMesh,
 }
 
 impl OptimizeConfig {
@@ -201,6 +213,24 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
         }
     }
 
+    let reference_mesh = match o.get("reference_mesh") {
+        None => None,
+        Some(v) => {
+            let field = o.at("reference_mesh");
+            let path = file_at(v, &field, base_dir)?;
+            let mesh =
+                crate::io::read_mesh(&path).map_err(|e| Error::field(&field, e.to_string()))?;
+            if super::optimized_shapes(&scene, &params, &grids).is_empty() {
+                return Err(Error::field(
+                    field,
+                    "the optimisation changes no shape (optimize names no grid and no parameter \
+                     of a shape) to measure against the mesh",
+                ));
+            }
+            Some(ReferenceMesh { path, mesh })
+        }
+    };
+
     let config = OptimizeConfig {
         path: path.to_path_buf(),
         scene_path,
@@ -225,6 +255,7 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
         },
         target_spp,
         snapshot_every,
+        reference_mesh,
     };
     Ok(config)
 }

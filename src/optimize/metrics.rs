@@ -1,5 +1,6 @@
 //! How close a shape is to a reference shape: the intersection over union of their inside sets and a
-//! symmetric Chamfer distance between their surfaces.
+//! symmetric Chamfer distance between their surfaces; and how close the optimised shapes' mesh is to
+//! a reference mesh ([`mesh_quality`], the measures of [`crate::mesh::metrics`]).
 
 use crate::error::Result;
 use crate::integrator::surface_sampling::sample_surface;
@@ -102,6 +103,48 @@ pub fn shape_quality(current: &Scene, reference: &Scene, name: &str) -> Result<O
     let iou = iou(a, b, region, 64);
     let chamfer = chamfer(a, b, &current.trace, 1000, 0)?;
     Ok(Some((iou, chamfer)))
+}
+
+/// Lattice points along the longest side of a shape's box when its mesh is extracted to be measured
+/// against a reference mesh ([`crate::mesh::extract_shape`]).
+pub const MESH_RESOLUTION: usize = 64;
+
+/// The surfaces of the shapes named `shapes` of `scene`, extracted at `res` ([`MESH_RESOLUTION`] for
+/// the measures), as one mesh in scene coordinates. Errors: an unknown or unbounded shape.
+pub fn shapes_mesh(
+    scene: &Scene,
+    shapes: &[String],
+    res: usize,
+) -> Result<crate::mesh::TriangleMesh> {
+    let mut out = crate::mesh::TriangleMesh::default();
+    for name in shapes {
+        let mesh = crate::mesh::extract_shape(scene.shape_named(name)?, res)?;
+        let base = out.vertices.len() as u32;
+        out.vertices.extend(mesh.vertices);
+        out.normals.extend(mesh.normals);
+        out.faces
+            .extend(mesh.faces.iter().map(|f| f.map(|i| i + base)));
+    }
+    Ok(out)
+}
+
+/// Chamfer distance, normal consistency and IoU ([`crate::mesh::metrics`], default options) of the
+/// shapes `shapes` of `scene` (extracted at [`MESH_RESOLUTION`]) against `reference`; NaN each when
+/// the shapes have no surface to measure (an empty grid, say).
+pub fn mesh_quality(
+    scene: &Scene,
+    shapes: &[String],
+    reference: &crate::mesh::metrics::Measured,
+) -> crate::mesh::metrics::MeshMetrics {
+    use crate::mesh::metrics::{Measured, MeshMetrics, MetricOptions, compare_prepared};
+    let measured = shapes_mesh(scene, shapes, MESH_RESOLUTION)
+        .and_then(|mesh| Measured::new(&mesh))
+        .and_then(|mesh| compare_prepared(&mesh, reference, &MetricOptions::default()));
+    measured.unwrap_or(MeshMetrics {
+        chamfer: f64::NAN,
+        normal_consistency: f64::NAN,
+        iou: f64::NAN,
+    })
 }
 
 #[cfg(test)]

@@ -398,6 +398,26 @@ impl Optimization {
     }
 }
 
+/// The shapes an optimisation of `params` and `grids` changes, each once, in order: the shapes
+/// holding the grids, then the shapes named by the parameters (`SHAPE.…`).
+pub fn optimized_shapes(scene: &Scene, params: &[String], grids: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for block in scene.grid_blocks() {
+        if grids.contains(&block.node) && !out.contains(&block.shape_name) {
+            out.push(block.shape_name.clone());
+        }
+    }
+    for p in params {
+        if let Some((shape, _)) = p.split_once('.')
+            && scene.shape_named(shape).is_ok()
+            && !out.iter().any(|s| s == shape)
+        {
+            out.push(shape.to_string());
+        }
+    }
+    out
+}
+
 /// The random stream of the views' choice.
 const VIEW_STREAM: u64 = 0x71E5_0F17;
 

@@ -7,9 +7,16 @@
 //! - `iou`, `chamfer`: how close an optimised grid's shape is to the target scene's shape of the same
 //!   name ([`super::metrics::shape_quality`]); named `iou.SHAPE`, `chamfer.SHAPE` when several shapes
 //!   are compared, absent when none is (targets given as images);
+//! - `mesh_chamfer`, `mesh_normal_consistency`, `mesh_iou`: with `reference_mesh`, the optimised
+//!   shapes' mesh against it ([`super::metrics::mesh_quality`]: the Chamfer distance as a fraction of
+//!   the reference's bounding-box diagonal, the mean `|n·n'|` of nearest points, the IoU of the
+//!   insides); absent without;
 //! - `loss_pass_seconds` ... `grid_edit_seconds`: where the iteration's time went ([`StageSeconds`]).
 
 use super::StageSeconds;
+
+/// The columns of the measures against a reference mesh.
+pub const MESH_COLUMNS: [&str; 3] = ["mesh_chamfer", "mesh_normal_consistency", "mesh_iou"];
 
 /// One row of `progress.csv`: a finished iteration.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,12 +32,15 @@ pub struct Row {
     /// `(IoU, Chamfer distance)` of each compared shape, in the order of the columns (NaN when the
     /// shape cannot be measured).
     pub shapes: Vec<(f64, f64)>,
+    /// The measures against the reference mesh, when there is one.
+    pub mesh: Option<crate::mesh::metrics::MeshMetrics>,
     /// Where the iteration's time went.
     pub stage_seconds: StageSeconds,
 }
 
-/// The columns of `progress.csv` when the shapes `compared` are measured against the target scene.
-pub fn columns(compared: &[String]) -> Vec<String> {
+/// The columns of `progress.csv` when the shapes `compared` are measured against the target scene,
+/// and the optimised shapes against a reference mesh if `mesh`.
+pub fn columns(compared: &[String], mesh: bool) -> Vec<String> {
     let mut out: Vec<String> = ["iteration", "loss", "seconds", "gradient_norm"]
         .map(String::from)
         .into();
@@ -40,6 +50,9 @@ pub fn columns(compared: &[String]) -> Vec<String> {
         } else {
             out.extend([format!("iou.{name}"), format!("chamfer.{name}")]);
         }
+    }
+    if mesh {
+        out.extend(MESH_COLUMNS.map(String::from));
     }
     out.extend(
         [
@@ -67,6 +80,9 @@ impl Row {
         for &(iou, chamfer) in &self.shapes {
             out.extend([iou, chamfer]);
         }
+        if let Some(m) = &self.mesh {
+            out.extend([m.chamfer, m.normal_consistency, m.iou]);
+        }
         out.extend([
             t.loss_pass,
             t.interior,
@@ -87,6 +103,9 @@ impl Row {
         );
         for (iou, chamfer) in &self.shapes {
             row += &format!(",{iou},{chamfer}");
+        }
+        if let Some(m) = &self.mesh {
+            row += &format!(",{},{},{}", m.chamfer, m.normal_consistency, m.iou);
         }
         row += &format!(
             ",{},{},{},{},{}",

@@ -12,11 +12,12 @@ use super::config::{OptimizeConfig, Target};
 use super::pictures::{loss_plot, views_picture};
 use super::progress::{Row, columns};
 use super::targets::{cached_targets, render_targets_with, target_seed};
-use super::{Iteration, Optimization, metrics};
+use super::{Iteration, Optimization, metrics, optimized_shapes};
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::Progress;
 use crate::io::{self, Writer, file_message, file_name};
+use crate::mesh::metrics::Measured;
 use crate::scene::BlockKind;
 use crate::scene::{Scene, patch};
 use std::io::Write as _;
@@ -65,8 +66,8 @@ pub struct Outcome {
     /// Wall time of the iterations, seconds.
     pub seconds: f64,
     /// The files and folders written in the output folder, in the order the `optimize` command
-    /// lists them (`progress.csv`, `loss.png`, `views.png`, `result.json`, each grid's `NODE.npy`,
-    /// `snapshots/`); empty without a folder.
+    /// lists them (`progress.csv`, `loss.png`, `views.png`, `result.json`, each grid's `NODE.npy`
+    /// and `NODE.ply`, `snapshots/`); empty without a folder.
     pub written: Vec<String>,
     /// The scene at the optimised values.
     pub scene: Scene,
@@ -109,6 +110,9 @@ pub fn run(
             .iter()
             .map(|f| out.join(f))
             .chain(grid_outputs.iter().map(|(_, p)| p.clone()))
+            .chain((grid_outputs.iter())
+                .filter(|(node, _)| has_mesh(scene, node))
+                .map(|(_, p)| p.with_extension("ply")))
             .collect();
         check_outputs(cfg, out, &finals)?;
         std::fs::create_dir_all(out)
@@ -163,7 +167,18 @@ pub fn run(
             .filter(|name| r.shape_named(name).is_ok())
             .collect()
     });
-    let columns = columns(&compared);
+    // The reference mesh, prepared once, and the shapes measured against it.
+    let mesh_shapes = optimized_shapes(&opt.scene, &settings.params, &settings.grids);
+    let reference_mesh = match &cfg.reference_mesh {
+        Some(r) => Some(Measured::new(&r.mesh).map_err(|e| {
+            in_config(Error::field(
+                "reference_mesh",
+                format!("{}: {e}", r.path.display()),
+            ))
+        })?),
+        None => None,
+    };
+    let columns = columns(&compared, reference_mesh.is_some());
     write_line(&columns.join(","))?;
 
     let iterations = settings.iterations;
@@ -187,12 +202,15 @@ pub fn run(
             };
             shapes.push(quality.unwrap_or((f64::NAN, f64::NAN)));
         }
+        let mesh = (reference_mesh.as_ref())
+            .map(|reference| metrics::mesh_quality(&opt.scene, &mesh_shapes, reference));
         let row = Row {
             iteration: index,
             loss,
             seconds,
             gradient_norm,
             shapes,
+            mesh,
             stage_seconds,
         };
         write_line(&row.csv())?;
@@ -211,6 +229,10 @@ pub fn run(
             let picture = views_picture(&opt, settings.spp, settings.seed).map_err(in_config)?;
             let path = dir.join(format!("views_{:05}.png", opt.done));
             io::write_png(&path, picture.width, picture.height, &picture.rgb)?;
+            for (node, _) in grid_outputs.iter().filter(|(n, _)| has_mesh(&opt.scene, n)) {
+                let mesh = node_mesh(&opt, node).map_err(in_config)?;
+                io::write_mesh(&dir.join(format!("{node}_{:05}.ply", opt.done)), &mesh)?;
+            }
         }
     }
     observer.status(Status::Done);
@@ -243,7 +265,8 @@ pub fn run(
     })
 }
 
-/// Writes `views.png`, `loss.png`, each optimised grid's `NODE.npy` and `result.json` in `out`, all or
+/// Writes `views.png`, `loss.png`, each optimised grid's `NODE.npy` and `NODE.ply` (the mesh of its
+/// shape) and `result.json` in `out`, all or
 /// nothing; returns the names of the final files in the order the command lists them (`progress.csv`
 /// first: it is renamed into place next).
 fn write_finals(
@@ -282,6 +305,11 @@ fn write_finals(
             }
         };
         files.push((path.clone(), writer));
+        if has_mesh(&opt.scene, node) {
+            let mesh = node_mesh(opt, node).map_err(in_config)?;
+            let ply = io::bytes_writer(io::ply_bytes(&mesh));
+            files.push((path.with_extension("ply"), ply));
+        }
     }
     files.push((out.join("result.json"), io::bytes_writer(result)));
     io::write_all_or_nothing(files)?;
@@ -289,8 +317,29 @@ fn write_finals(
         .iter()
         .map(|s| s.to_string())
         .collect();
-    written.extend(grid_outputs.iter().map(|(_, p)| file_name(p)));
+    for (node, p) in grid_outputs {
+        written.push(file_name(p));
+        if has_mesh(&opt.scene, node) {
+            written.push(file_name(&p.with_extension("ply")));
+        }
+    }
     Ok(written)
+}
+
+/// Whether the optimised block `node` is a grid, whose shape's mesh the run writes (a volume
+/// texture has none).
+fn has_mesh(scene: &Scene, node: &str) -> bool {
+    scene.texture_range(node).is_none()
+}
+
+/// The surface of the shape holding grid `node`, as the `mesh` command extracts it (scene
+/// coordinates, [`crate::mesh::DEFAULT_RESOLUTION`]).
+fn node_mesh(opt: &Optimization, node: &str) -> Result<crate::mesh::TriangleMesh> {
+    let blocks = opt.scene.grid_blocks();
+    let block = (blocks.iter().find(|b| b.node == node))
+        .ok_or_else(|| Error::field("optimize.grids", format!("no grid {node:?}")))?;
+    let shape = opt.scene.shape_named(&block.shape_name)?;
+    crate::mesh::extract_shape(shape, crate::mesh::DEFAULT_RESOLUTION)
 }
 
 /// A writer of a PNG of `image`.

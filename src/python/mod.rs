@@ -97,7 +97,7 @@ pub(crate) fn warn_lines(py: Python<'_>, lines: Vec<String>) -> PyResult<()> {
 }
 
 /// The extension module: the `Scene` class, `render`, `diff`, `fd`, `grad`, `bake`, `optimize`,
-/// `read_exr`, `write_exr`, `extract_mesh`, and `cli` (the command-line tool).
+/// `read_exr`, `write_exr`, `extract_mesh`, `mesh_to_grid`, and `cli` (the command-line tool).
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
@@ -112,6 +112,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tools::fd, m)?)?;
     m.add_function(wrap_pyfunction!(tools::bake, m)?)?;
     m.add_function(wrap_pyfunction!(mesh::extract_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(mesh::mesh_to_grid, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli, m)?)?;
     m.add("DEFAULT_SEED", 0u64)?;
     Ok(())

@@ -14,13 +14,14 @@ const CONFIG_NAME: &str = "config";
 /// Runs the optimisation that ``config`` describes and returns its progress: one dict per
 /// iteration with the columns of the ``optimize`` command's ``progress.csv`` (``iteration``, an
 /// int; ``loss``, ``seconds``, ``gradient_norm``, ``iou`` and ``chamfer`` when the target scene
-/// holds an optimised grid's shape, and the ``*_seconds`` of each stage; floats).
+/// holds an optimised grid's shape, ``mesh_chamfer``, ``mesh_normal_consistency`` and ``mesh_iou``
+/// with ``reference_mesh``, and the ``*_seconds`` of each stage; floats).
 ///
 /// ``config``: the path of an ``OPT.json``, or a dict of its structure (as ``json.load`` returns
 /// it), whose file names (``scene``, ``target``) resolve against ``base_dir`` (default: the current
 /// folder). With ``out`` (a folder, created if missing) the run writes the command's files there:
 /// ``progress.csv``, ``loss.png``, ``views.png``, ``result.json`` (the optimised scene, for
-/// ``Scene.load``), each optimised grid's ``NODE.npy``, ``snapshots/`` and the cache of rendered
+/// ``Scene.load``), each optimised grid's ``NODE.npy`` and ``NODE.ply``, ``snapshots/`` and the cache of rendered
 /// targets; without it nothing is written. The numbers are those of the command for the same
 /// config, bit for bit (apart from the times). ``threads`` caps this call's threads. Raises
 /// ``SceneError`` naming the file (or ``config``) and the field.

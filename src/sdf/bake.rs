@@ -77,13 +77,24 @@ impl Baked {
 /// edge, `res` samples along the longest edge ([`bake`]). Errors: an unbounded node (e.g. a plane),
 /// named `what` in the message.
 pub fn bake_padded(sdf: &Sdf, res: usize, what: &str) -> crate::Result<Baked> {
+    bake_padded_by(sdf, res, BAKE_PADDING, what)
+}
+
+/// [`bake_padded`] with the box grown by `padding` (≥ 0) times the longest edge of the bounds on every
+/// side. Errors: an unbounded node, or a box with no volume (a flat node without padding).
+pub fn bake_padded_by(sdf: &Sdf, res: usize, padding: f32, what: &str) -> crate::Result<Baked> {
     let local = sdf.bounds();
     if !local.is_finite() || local.is_empty() {
         return Err(crate::Error::Unsupported(format!(
             "{what} is unbounded (e.g. a plane), it cannot be baked into a grid"
         )));
     }
-    let padded = local.expanded(BAKE_PADDING * local.extent().max_element());
+    let padded = local.expanded(padding * local.extent().max_element());
+    if padded.extent().min_element().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Err(crate::Error::Unsupported(format!(
+            "{what}'s box has no volume with padding {padding}; use a padding > 0"
+        )));
+    }
     Ok(Baked {
         grid: bake(sdf, padded.min, padded.max, res),
         bbox_min: padded.min,

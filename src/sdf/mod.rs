@@ -43,7 +43,7 @@ mod transform;
 mod validate;
 
 pub use crate::io::npy::{read_npy, write_npy};
-pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded};
+pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded, bake_padded_by};
 pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
 pub use crossing_creases::CrossingCrease;
