@@ -102,8 +102,8 @@ fn expected(row: f32, column: f32) -> glam::Vec3 {
         + (t(i0 + 1, j0) * (1.0 - fx) + t(i0 + 1, j0 + 1) * fx) * fy
 }
 
-/// The convention, pinned: `u = atan2(x, −z)/2π`, `v = acos(y)/π`, row 0 up, texel `(i, j)` centred
-/// at `((j + 0.5)/W, (i + 0.5)/H)`, bilinear, wrapping in `u`, clamped in `v`; `rotate` maps the map
+/// The convention, pinned: `u = atan2(x, −z)/2π`, `v = acos(y)/π`, row 0 up, texel `(i, j)` at
+/// `u = (j + 0.5)/W`, `v = i/(H − 1)` (Mitsuba 3's), bilinear, wrapping in `u`; `rotate` maps the map
 /// into the world (a world direction is looked up at `R⁻¹ d`), the angle in degrees.
 #[test]
 fn mapping_of_a_hand_made_map() {
@@ -112,9 +112,9 @@ fn mapping_of_a_hand_made_map() {
         EnvMap::new(8, 4, texels).unwrap()
     };
     let e = envmap(map(), 1.0, glam::Vec3::Y, 0.0);
-    // Texel centres: (row 1, column 2) and (row 2, column 6).
-    for (i, j) in [(1usize, 2usize), (2, 6), (0, 0), (3, 7)] {
-        let d = EnvMap::direction((j as f32 + 0.5) / 8.0, (i as f32 + 0.5) / 4.0);
+    // Texels (the first and last rows lie at the poles, where every column meets).
+    for (i, j) in [(1usize, 2usize), (2, 6), (1, 0), (2, 7)] {
+        let d = EnvMap::direction((j as f32 + 0.5) / 8.0, i as f32 / 3.0);
         assert_rgb(arriving(&e, d), hand_made(i, j).into(), "texel centre");
     }
     // Known directions. −z: u = 0 (half-way between the last and the first column), v = 1/2 (half-way
@@ -126,20 +126,20 @@ fn mapping_of_a_hand_made_map() {
         // +z: u = 1/2; −x: u = 3/4.
         (glam::Vec3::Z, expected(1.5, 3.5)),
         (glam::Vec3::NEG_X, expected(1.5, 5.5)),
-        // 30° above the horizon towards +x: v = 1/3, row coordinate 4/3 − 1/2.
+        // 30° above the horizon towards +x: v = 1/3, row coordinate 3 · 1/3.
         (
             glam::Vec3::new(60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0),
-            expected(4.0 / 3.0 - 0.5, 1.5),
+            expected(1.0, 1.5),
         ),
-        // 10° from the zenith towards −z: v = 1/18, above row 0's centres: row 0 only (clamped).
+        // 10° from the zenith towards −z: v = 1/18, row coordinate 1/6.
         (
             glam::Vec3::new(0.0, 10f32.to_radians().cos(), -(10f32.to_radians().sin())),
-            expected(0.0, -0.5),
+            expected(1.0 / 6.0, -0.5),
         ),
-        // 10° from the nadir towards +z: clamped to row 3.
+        // 10° from the nadir towards +z: v = 17/18, row coordinate 17/6.
         (
             glam::Vec3::new(0.0, -(10f32.to_radians().cos()), 10f32.to_radians().sin()),
-            expected(3.0, 3.5),
+            expected(17.0 / 6.0, 3.5),
         ),
     ];
     for (d, want) in cases {
@@ -147,7 +147,7 @@ fn mapping_of_a_hand_made_map() {
     }
     // Wrapping: u = 0.01 lies between column 7 (wrapped) and column 0.
     let d = EnvMap::direction(0.01, 0.375);
-    assert_rgb(arriving(&e, d), expected(1.0, 0.08 - 0.5), "wrap");
+    assert_rgb(arriving(&e, d), expected(1.125, 0.08 - 0.5), "wrap");
     // Scale multiplies.
     let scaled = envmap(map(), 2.5, glam::Vec3::Y, 0.0);
     assert_rgb(
@@ -182,7 +182,7 @@ fn rendered_pixels_see_the_mapping() {
         ([0.0, 0.0, 1.0], expected(1.5, 3.5)),
         (
             [60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0],
-            expected(4.0 / 3.0 - 0.5, 1.5),
+            expected(1.0, 1.5),
         ),
     ] {
         let json = format!(

@@ -69,7 +69,10 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
             ("every texel of the volume texture", String::new())
         } else {
             let ply = out.join(format!("{node}.ply"));
-            ("every value of the grid", format!("; its shape's mesh in {}", ply.display()))
+            (
+                "every value of the grid",
+                format!("; its shape's mesh in {}", ply.display()),
+            )
         };
         outln!(
             "  {node}: {what}, in {}{}",

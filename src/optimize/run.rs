@@ -110,9 +110,11 @@ pub fn run(
             .iter()
             .map(|f| out.join(f))
             .chain(grid_outputs.iter().map(|(_, p)| p.clone()))
-            .chain((grid_outputs.iter())
-                .filter(|(node, _)| has_mesh(scene, node))
-                .map(|(_, p)| p.with_extension("ply")))
+            .chain(
+                (grid_outputs.iter())
+                    .filter(|(node, _)| has_mesh(scene, node))
+                    .map(|(_, p)| p.with_extension("ply")),
+            )
             .collect();
         check_outputs(cfg, out, &finals)?;
         std::fs::create_dir_all(out)
