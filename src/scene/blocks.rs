@@ -391,11 +391,13 @@ impl Scene {
 
     /// The error for an unknown block node: the scene's blocks.
     pub(super) fn unknown_grid(&self, node: &str) -> Error {
-        let nodes: Vec<String> = self.blocks().into_iter().map(|b| b.node).collect();
-        let known = if nodes.is_empty() {
-            "the scene has no grid and no volume texture".to_string()
-        } else {
-            format!("grid nodes and volume textures: {}", nodes.join(", "))
+        let blocks = self.blocks();
+        let textures = blocks.iter().any(|b| b.kind != BlockKind::Grid);
+        let nodes: Vec<String> = blocks.into_iter().map(|b| b.node).collect();
+        let known = match (nodes.is_empty(), textures) {
+            (true, _) => "the scene has no grid".to_string(),
+            (false, false) => format!("grid nodes: {}", nodes.join(", ")),
+            (false, true) => format!("grid nodes and volume textures: {}", nodes.join(", ")),
         };
         Error::field("grids", format!("no grid node {node:?} ({known})"))
     }
