@@ -119,3 +119,67 @@ impl Row {
         self.shapes.first().map(|s| s.0)
     }
 }
+
+/// The columns `names` of every row of a `progress.csv` written by [`Row::csv`], row by row (for the
+/// figures drawn from finished runs). Errors name the file and the missing column or unreadable row.
+pub fn read_columns(path: &std::path::Path, names: &[&str]) -> crate::error::Result<Vec<Vec<f64>>> {
+    use crate::error::Error;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, e))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let columns = (names.iter())
+        .map(|name| {
+            (header.iter().position(|h| h == name))
+                .ok_or_else(|| Error::file(path, format!("no column {name:?}")))
+        })
+        .collect::<crate::error::Result<Vec<usize>>>()?;
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let row = (columns.iter())
+            .map(|&c| cells.get(c).and_then(|cell| cell.parse::<f64>().ok()))
+            .collect::<Option<Vec<f64>>>()
+            .ok_or_else(|| {
+                Error::file(path, format!("row {}: not {} numbers", k + 2, names.len()))
+            })?;
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_read_back_as_written() {
+        let rows: Vec<Row> = (0..3)
+            .map(|i| Row {
+                iteration: i,
+                loss: 0.1 / (i + 1) as f64,
+                seconds: 1.5 * i as f64,
+                gradient_norm: 2.0,
+                shapes: vec![(0.5 + 0.1 * i as f64, 0.01)],
+                mesh: None,
+                stage_seconds: StageSeconds::default(),
+            })
+            .collect();
+        let dir = std::env::temp_dir().join(format!("progress-read-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("progress.csv");
+        let mut text = columns(&["shape".into()], false).join(",") + "\n";
+        for row in &rows {
+            text += &(row.csv() + "\n");
+        }
+        std::fs::write(&path, text).unwrap();
+        let read = read_columns(&path, &["seconds", "iou"]).unwrap();
+        let expected: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|r| vec![r.seconds, r.shapes[0].0])
+            .collect();
+        assert_eq!(read, expected);
+        let missing = read_columns(&path, &["mesh_iou"]).unwrap_err().to_string();
+        assert!(missing.contains("mesh_iou"), "{missing}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
