@@ -196,16 +196,22 @@ pub fn run(
             ..
         } = opt.step().map_err(in_config)?;
         let seconds = start.elapsed().as_secs_f64();
+        // The shapes are measured at the run's result: the moving average of the values.
+        let measured = if compared.is_empty() && reference_mesh.is_none() {
+            None
+        } else {
+            Some(opt.averaged_scene().map_err(in_config)?)
+        };
         let mut shapes = Vec::with_capacity(compared.len());
         for name in &compared {
-            let quality = match reference {
-                Some(r) => metrics::shape_quality(&opt.scene, r, name).map_err(in_config)?,
-                None => None,
+            let quality = match (reference, &measured) {
+                (Some(r), Some(m)) => metrics::shape_quality(m, r, name).map_err(in_config)?,
+                _ => None,
             };
             shapes.push(quality.unwrap_or((f64::NAN, f64::NAN)));
         }
-        let mesh = (reference_mesh.as_ref())
-            .map(|reference| metrics::mesh_quality(&opt.scene, &mesh_shapes, reference));
+        let mesh = (reference_mesh.as_ref().zip(measured.as_ref()))
+            .map(|(reference, m)| metrics::mesh_quality(m, &mesh_shapes, reference));
         let row = Row {
             iteration: index,
             loss,
@@ -228,17 +234,27 @@ pub fn run(
         {
             std::fs::create_dir_all(dir)
                 .map_err(|e| Error::file(dir, format!("cannot create: {e}")))?;
-            let picture = views_picture(&opt, settings.spp, settings.seed).map_err(in_config)?;
+            // Snapshots show the averaged values, as the result will.
+            let averaged = opt.averaged_scene().map_err(in_config)?;
+            let current = std::mem::replace(&mut opt.scene, averaged);
+            let picture = views_picture(&opt, settings.spp, settings.seed).map_err(in_config);
             let path = dir.join(format!("views_{:05}.png", opt.done));
-            io::write_png(&path, picture.width, picture.height, &picture.rgb)?;
+            let mut meshes = Vec::new();
             for (node, _) in grid_outputs.iter().filter(|(n, _)| has_mesh(&opt.scene, n)) {
-                let mesh = node_mesh(&opt, node).map_err(in_config)?;
-                io::write_mesh(&dir.join(format!("{node}_{:05}.ply", opt.done)), &mesh)?;
+                meshes.push((node, node_mesh(&opt, node).map_err(in_config)));
+            }
+            opt.scene = current;
+            let picture = picture?;
+            io::write_png(&path, picture.width, picture.height, &picture.rgb)?;
+            for (node, mesh) in meshes {
+                io::write_mesh(&dir.join(format!("{node}_{:05}.ply", opt.done)), &mesh?)?;
             }
         }
     }
     observer.status(Status::Done);
     drop(csv);
+    // The result: the moving average of the values (the last values without one).
+    opt.scene = opt.averaged_scene().map_err(in_config)?;
     let seconds = start.elapsed().as_secs_f64();
 
     let mut written = Vec::new();
