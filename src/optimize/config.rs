@@ -32,7 +32,7 @@ pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
 /// Whether grid steps follow the lattice spacing when `learning_rate_resolution` is absent.
 pub const DEFAULT_LEARNING_RATE_RESOLUTION: bool = true;
 /// The moving average's weight on the past when `ema` is absent.
-pub const DEFAULT_EMA: f32 = 0.9;
+pub const DEFAULT_EMA: f32 = 0.0;
 /// The per-entry gradient clamp (in running RMS of the entry) when `gradient_clamp` is absent.
 pub const DEFAULT_GRADIENT_CLAMP: Option<f64> = None;
 /// Levels of the loss's image pyramid when `loss_scales` is absent.
