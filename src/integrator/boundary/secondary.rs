@@ -120,7 +120,7 @@
 //! later vertices ([`super::crease_tears`]), and the hard shadow edges of delta lights, whose
 //! segments start at the light ([`super::delta_shadows`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
-//! the creases of hard CSG between unbounded children.
+//! the creases of hard CSG between unbounded children beyond the scene's crease region.
 
 use super::crease_shadows::CreaseShadows;
 use super::crease_tears::CreaseTears;
