@@ -371,27 +371,14 @@ impl Scene {
     }
 
     /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, reason)`
-    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children; and under a point or directional
-    /// light every crease, whose hard shadow edges the delta lights' term does not sample):
-    /// derivatives that move those curves (any geometric parameter of the scene, through the camera,
-    /// the lights or the shape) miss those terms.
+    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children): derivatives that move those curves
+    /// (any geometric parameter of the scene, through the camera, the lights or the shape) miss those
+    /// terms. The edges of sharp boxes and cylinders and bounded hard CSG creases are sampled, seen
+    /// from the camera, past area lights and from delta lights alike.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
-        let delta = self.emitters.iter().any(|e| e.emitter.is_delta());
         self.shapes
             .iter()
-            .filter_map(|s| {
-                let under_delta = || {
-                    (s.sdf.creases())
-                        .map(|r| format!("{r}, its shadows from point and directional lights"))
-                };
-                let reason = s.sdf.unsampled_creases();
-                let reason = if delta {
-                    reason.or_else(under_delta)
-                } else {
-                    reason
-                };
-                reason.map(|r| (s.name.clone(), r))
-            })
+            .filter_map(|s| s.sdf.unsampled_creases().map(|r| (s.name.clone(), r)))
             .collect()
     }
 
