@@ -402,14 +402,13 @@ impl Scene {
         self.shapes.iter().any(|s| s.sdf.has_crease_edges())
     }
 
-    /// The shapes with crease curves whose boundary terms are not sampled, or not whole, as
-    /// `(shape name, reason)` ([`Sdf::unsampled_creases`]: hard CSG of unbounded children, sampled only
-    /// within [`Scene::crease_region`]; and under a point or directional light every crease, whose
-    /// hard shadow edges the delta lights' term does not sample): derivatives that move those curves
-    /// (any geometric parameter of the scene, through the camera, the lights or the shape) miss those
-    /// terms.
+    /// The shapes with crease curves whose boundary terms are not sampled whole, as `(shape name,
+    /// reason)` ([`Sdf::unsampled_creases`]: hard CSG of unbounded children that nothing bounds, sampled
+    /// only within [`Scene::crease_region`]): derivatives that move those curves beyond it (any
+    /// geometric parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    /// The edges of sharp boxes and cylinders and bounded hard CSG creases are sampled, seen from the
+    /// camera, past area lights and from delta lights alike.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
-        let delta = self.emitters.iter().any(|e| e.emitter.is_delta());
         let region = self.crease_region();
         let corner = |p: glam::Vec3| format!("[{:.3}, {:.3}, {:.3}]", p.x, p.y, p.z);
         let within = format!(
@@ -420,17 +419,7 @@ impl Scene {
         self.shapes
             .iter()
             .filter_map(|s| {
-                let under_delta = || {
-                    (s.sdf.creases())
-                        .map(|r| format!("{r}, its shadows from point and directional lights"))
-                };
-                let reason = (s.sdf.unsampled_creases()).map(|r| format!("{r}, {within}"));
-                let reason = if delta {
-                    reason.or_else(under_delta)
-                } else {
-                    reason
-                };
-                reason.map(|r| (s.name.clone(), r))
+                (s.sdf.unsampled_creases()).map(|r| (s.name.clone(), format!("{r}, {within}")))
             })
             .collect()
     }
