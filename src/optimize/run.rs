@@ -346,7 +346,12 @@ pub(crate) fn block_file(scene: &Scene, node: &str) -> String {
 fn write_envmap(path: &Path, shape: &[usize], values: &[f32]) -> Result<()> {
     let (h, w) = (shape[0], shape[1]);
     let channels: Vec<(String, Vec<f32>)> = (["R", "G", "B"].iter().enumerate())
-        .map(|(c, n)| (n.to_string(), values.iter().skip(c).step_by(3).copied().collect()))
+        .map(|(c, n)| {
+            (
+                n.to_string(),
+                values.iter().skip(c).step_by(3).copied().collect(),
+            )
+        })
         .collect();
     io::write_exr(path, w as u32, h as u32, &channels)
 }

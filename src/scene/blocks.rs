@@ -13,7 +13,7 @@
 use super::params::root_prefix;
 use super::{Scene, Shape};
 use crate::declare;
-use crate::emitter::{EnvMap, Emitter};
+use crate::emitter::{Emitter, EnvMap};
 use crate::error::{Error, Result};
 use crate::scalar::BlockValues;
 use crate::sdf::{GridData, Sdf};
