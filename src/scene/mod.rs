@@ -12,7 +12,7 @@ mod reach;
 mod selection;
 pub mod settings;
 
-pub(crate) use blocks::visit_selections_mut;
+pub(crate) use blocks::visit_scene_selections_mut;
 pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};
 pub use bvh::Bvh;
 pub use integrator_kind::IntegratorKind;
