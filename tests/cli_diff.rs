@@ -130,7 +130,8 @@ fn diff_note_names_creased_shapes() {
     });
     let stdout = assert_success(&run(&dir, &args));
     assert!(!stdout.contains("crease"), "{stdout}");
-    // Two planes cross along a line no finite box holds: not extracted, and named.
+    // Two planes cross along a line no finite box of the shape holds: sampled within the scene's
+    // crease region only, and named with it.
     write_scene(&dir, |v| {
         v["shapes"][0]["sdf"] = serde_json::json!({"type": "intersection", "children": [
             {"type": "plane", "normal": [0.0, 1.0, 0.0], "offset": 0.0},
@@ -141,7 +142,8 @@ fn diff_note_names_creased_shapes() {
     assert!(
         stdout.contains("not sampled along crease curves")
             && stdout.contains(
-                "ball (hard intersection of unbounded children (planes) whose surfaces cross)"
+                "ball (hard CSG of unbounded children (planes) whose crease no bounded child \
+                 cuts, sampled only within ["
             ),
         "{stdout}"
     );

@@ -217,6 +217,50 @@ fn named_parameters_match_forward_mode_term_by_term() {
     }
 }
 
+/// A sparse adjoint (zero outside a 6×6 window of a 24×24 image, as where an inverse rendering's image
+/// and target agree): reverse mode skips the camera samples that can reach no pixel of non-zero adjoint
+/// and must still equal the forward mode's contraction term by term. The samples of the pixels just
+/// outside the window splat into it through the moving pixel filter; skipping them would show as an
+/// error of the order of that share (measured: rounding, as for a dense adjoint).
+#[test]
+fn sparse_adjoint_matches_forward_mode() {
+    let scene = small("scenes/sphere_floor.json", 24);
+    let params = names(&[
+        "ball.radius",
+        "ball.center.y",
+        "ball.center.x",
+        "camera.fov_y",
+    ]);
+    let layout = GradientLayout::select(&scene, &params, &[]).unwrap();
+    let options = options(4, 9, 2, 4, Normalization::default());
+    let mut g = adjoint(24, 24, 5);
+    for y in 0..24 {
+        for x in 0..24 {
+            if !(9..15).contains(&x) || !(9..15).contains(&y) {
+                g.rgb[3 * (y * 24 + x)..3 * (y * 24 + x) + 3].fill(0.0);
+            }
+        }
+    }
+    let forward =
+        integrator::render_derivatives(&scene, &scene.select(&params).unwrap(), &options).unwrap();
+    let reverse = render_gradient(&scene, &layout, &g, &options).unwrap();
+    for (k, name) in params.iter().enumerate() {
+        for (term, f, r) in [
+            ("interior", &forward.interior, &reverse.interior),
+            ("primary", &forward.primary, &reverse.primary),
+            ("secondary", &forward.secondary, &reverse.secondary),
+        ] {
+            let want = dot(&g, &f[k]);
+            let got = r[k];
+            println!("{name} {term}: forward {want:.6e} reverse {got:.6e}");
+            assert!(
+                (got - want).abs() <= 1e-4 * want.abs().max(1e-3),
+                "{name} {term}: reverse {got} vs forward {want}"
+            );
+        }
+    }
+}
+
 /// The crease edges' terms (a turned sharp box with a ball bitten out of its corner, a crease where
 /// CSG children cross, and a sharp cylinder over a floor: seen by the camera, their shadows, and on
 /// `path` their tear after a bounce) in reverse mode equal the forward mode's contraction with the

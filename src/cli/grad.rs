@@ -162,13 +162,11 @@ pub(crate) fn grad(args: &GradArgs) -> Result<()> {
     if !layout.grids.is_empty() {
         let values: usize = layout.grids.iter().map(|(b, _)| b.len()).sum();
         let kinds = |kind: BlockKind| layout.grids.iter().filter(|(b, _)| b.kind == kind).count();
-        let (grids, volumes) = (kinds(BlockKind::Grid), kinds(BlockKind::Volume));
         let mut of = Vec::new();
-        if grids > 0 {
-            of.push(count(grids, "grid"));
-        }
-        if volumes > 0 {
-            of.push(count(volumes, "volume texture"));
+        for kind in [BlockKind::Grid, BlockKind::Volume, BlockKind::Envmap] {
+            if kinds(kind) > 0 {
+                of.push(count(kinds(kind), kind.describe()));
+            }
         }
         wrt.push(format!("{values} values of {}", join_and(&of)));
     }

@@ -65,8 +65,15 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         }
     }
     for node in &cfg.settings.grids {
+        let kind = (cfg.scene.blocks().into_iter())
+            .find(|b| b.node == *node)
+            .map(|b| b.kind);
         let (what, mesh) = if cfg.scene.texture_range(node).is_some() {
-            ("every texel of the volume texture", String::new())
+            let what = match kind {
+                Some(crate::scene::BlockKind::Envmap) => "every texel of the environment map",
+                _ => "every texel of the volume texture",
+            };
+            (what, String::new())
         } else {
             let ply = out.join(format!("{node}.ply"));
             (
@@ -76,7 +83,8 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         };
         outln!(
             "  {node}: {what}, in {}{}",
-            out.join(format!("{node}.npy")).display(),
+            out.join(crate::optimize::run::block_file(&cfg.scene, node))
+                .display(),
             mesh
         )?;
     }

@@ -13,7 +13,7 @@ pub(crate) fn params(scene: &Path) -> Result<()> {
 /// What `params` prints: every parameter as `name value`, and each grid node's values once, as
 /// `NODE.values [nz, ny, nx] (N values; ...)`, after the node's `level` (or at the end), and each
 /// volume texture's texels as `NAME.values [nz, ny, nx, 3]` (or `[nz, ny, nx]`) after its shape's
-/// parameters.
+/// parameters, and each environment map's as `NAME.values [H, W, 3]` after its emitter's.
 fn parameter_list(scene: &Scene) -> String {
     let mut out = String::new();
     for entry in scene.parameter_entries() {

@@ -31,13 +31,24 @@
 //! map itself). Directions within `1e-6` (in `sin θ`) of a pole are looked up with a detached
 //! direction: `u` is undefined there and its derivative infinite.
 //!
-//! The texel values are constants here; differentiating them needs a parameter block such as a
-//! grid's values (one lattice-sum-like tape entry per lookup of four texels, and the sampling tables
-//! rebuilt in `f32` when the values change).
+//! The texels are a parameter block `<name>.values` of shape `[H, W, 3]` (row-major from the top,
+//! the EXR's layout; [`crate::scene::ParamBlock`]), selected like a volume texture's
+//! ([`crate::bsdf::texture`]): a forward-mode direction `u` adds `ε Σ_k w_k u_k` to each channel of a
+//! lookup, a reverse-mode block records the four bilinear weights of each channel as one tape node
+//! ([`Scalar::block_terms`]). That is the interior term of the texels' derivative, and all of it: the
+//! radiance is continuous in the texels and a texel moves no visibility boundary.
+//!
+//! The sampling tables (and so the importance-sampling density and the multiple-importance weights)
+//! are built in `f32` from the current texels and stay detached: a derivative pass differentiates the
+//! integrand `f(ω)` at fixed sample directions drawn from a fixed density `p`, and
+//! `E_p[∂f/p] = ∫ ∂f dω = ∂∫ f dω` for any `p` that is positive wherever `∂f` is (the tables give
+//! every cell whose interpolant can be non-zero a positive density; where the whole map is black,
+//! BSDF sampling alone reaches it with weight 1), so detaching the density is unbiased. The tables
+//! are rebuilt when the values are replaced ([`EnvMap::with_values`]), e.g. after an optimiser's step.
 
 use crate::math::Vec3;
 use crate::math::sampling::{UNIFORM_SPHERE_PDF, uniform_sphere};
-use crate::scalar::Scalar;
+use crate::scalar::{BlockValues, Scalar};
 use std::f32::consts::PI;
 use std::path::Path;
 
@@ -67,6 +78,8 @@ pub struct EnvMap {
     /// Every texel has the same positive luminance: sampled uniformly over the sphere (the limit of
     /// the tables as the cells shrink), exactly as the `constant` emitter samples.
     uniform: bool,
+    /// How the texels are differentiated in the current pass (constants unless selected).
+    selection: BlockValues,
 }
 
 impl EnvMap {
@@ -103,6 +116,7 @@ impl EnvMap {
             cell_pdf: Vec::new(),
             mean: [0.0; 3],
             uniform: false,
+            selection: BlockValues::Constant,
         };
         map.build_tables();
         Ok(map)
@@ -145,6 +159,39 @@ impl EnvMap {
     /// Texel `(row, column)`.
     pub fn texel(&self, row: usize, column: usize) -> [f32; 3] {
         self.texels[row * self.width + column]
+    }
+
+    /// The texels as a block's values: shape `[H, W, 3]` (row-major from the top), C order.
+    pub fn values(&self) -> Vec<f32> {
+        self.texels.iter().flatten().copied().collect()
+    }
+
+    /// The `.npy` shape of [`EnvMap::values`]: `[H, W, 3]`.
+    pub fn shape(&self) -> Vec<usize> {
+        vec![self.height, self.width, 3]
+    }
+
+    /// The same map with texels `values` (layout of [`EnvMap::values`]), its sampling tables rebuilt
+    /// and its selection kept. Errors (the message) as [`EnvMap::new`], and a wrong number of values.
+    pub fn with_values(&self, values: &[f32]) -> Result<Self, String> {
+        let n = self.width * self.height * 3;
+        if values.len() != n {
+            return Err(format!("needs {n} values, got {}", values.len()));
+        }
+        let texels = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let mut map = Self::new(self.width, self.height, texels)?;
+        map.selection = self.selection.clone();
+        Ok(map)
+    }
+
+    /// How the texels are differentiated in the current pass.
+    pub fn selection(&self) -> &BlockValues {
+        &self.selection
+    }
+
+    /// Sets how the texels are differentiated ([`crate::scene::Selection`] does).
+    pub fn set_selection(&mut self, selection: BlockValues) {
+        self.selection = selection;
     }
 
     /// Whether the map is sampled uniformly over the sphere (one luminance everywhere): its sampling
@@ -240,7 +287,35 @@ impl EnvMap {
         let t = |i: usize, j: usize| Vec3::<S>::constant(self.texel(i, j).into());
         let top = t(i0, j0) * (S::one() - fx) + t(i0, j1) * fx;
         let bottom = t(i1, j0) * (S::one() - fx) + t(i1, j1) * fx;
-        top * (S::one() - fy) + bottom * fy
+        let value = top * (S::one() - fy) + bottom * fy;
+        if matches!(self.selection, BlockValues::Constant) {
+            return value;
+        }
+        // The texels' part: primal bilinear weights (a clamped row or a one-column map repeats an
+        // index; its weights add up).
+        let (px, py) = (fx.primal(), fy.primal());
+        let w = self.width;
+        let index = [i0 * w + j0, i0 * w + j1, i1 * w + j0, i1 * w + j1];
+        let weight = [
+            (1.0 - px) * (1.0 - py),
+            px * (1.0 - py),
+            (1.0 - px) * py,
+            px * py,
+        ];
+        let channel = |c: usize| -> S {
+            match &self.selection {
+                BlockValues::Direction { slot, u } if u.len() == 3 * self.texels.len() => {
+                    let du: f32 = (0..4).map(|k| weight[k] * u[index[k] * 3 + c]).sum();
+                    S::lift(0.0, Some(*slot)) * du
+                }
+                BlockValues::Gradient { first } => {
+                    let terms = std::array::from_fn::<_, 4, _>(|k| (index[k] * 3 + c, weight[k]));
+                    S::block_terms(*first, &terms)
+                }
+                _ => S::zero(),
+            }
+        };
+        value + Vec3::new(channel(0), channel(1), channel(2))
     }
 
     /// The radiance arriving from direction `d` (unit, in the map's frame, generic; see the module

@@ -26,6 +26,13 @@ pub trait SampleSink<S: Scalar> {
     /// A share of pixel `pixel`'s `F` and `W`, already weighted by that pixel's filter over the
     /// sample's density.
     fn add_splat(&mut self, pixel: usize, radiance: Vec3<S>, weight: S);
+    /// Whether the camera samples of pixel `pixel` (row-major index) can change what the sink holds;
+    /// `false` lets an estimator skip them (a reverse-mode sink whose pixel adjoint is zero wherever
+    /// they can land, [`super::AdjointFilm::skipping_zero_adjoint`]).
+    #[inline(always)]
+    fn needs_pixel(&self, _pixel: usize) -> bool {
+        true
+    }
     /// Called before a sample's first number is computed (a reverse-mode sink marks its tape here).
     #[inline(always)]
     fn begin_sample(&mut self) {}

@@ -8,11 +8,18 @@
 //! Each work item has a dense `f32` gradient buffer; buffers are merged in item order into an `f64`
 //! total, so the gradient is the same whatever the number of threads. A sample whose gradient is not
 //! finite is dropped and counted, as forward mode does with its derivatives.
+//!
+//! **Pixels of zero adjoint.** A share for a pixel whose adjoint is zero adds nothing, so a camera
+//! sample whose own pixel and splat footprint all have zero adjoint contributes exactly nothing
+//! ([`AdjointFilm::skipping_zero_adjoint`] lets the interior pass skip such pixels' samples
+//! without tracing them; the gradient is bit for bit the same). In inverse rendering against a
+//! target with a plain background most of the image is such pixels.
 
 use super::accumulate::{Film, SampleSink};
 use super::{Image, Normalization};
 use crate::math::Vec3;
 use crate::scalar::{Mark, Recording, Rev, Scalar};
+use std::sync::Arc;
 
 /// A reverse-mode film over a `width × height` image.
 pub struct AdjointFilm<'a> {
@@ -24,6 +31,8 @@ pub struct AdjointFilm<'a> {
     pub gradient: Vec<f64>,
     /// Samples whose gradient was not finite (dropped).
     pub invalid: u64,
+    /// Per pixel, whether its camera samples can reach a pixel of non-zero adjoint (`None`: all).
+    needed: Option<Arc<[bool]>>,
 }
 
 /// One work item of an [`AdjointFilm`].
@@ -36,6 +45,7 @@ pub struct AdjointTile<'a> {
     shares: Vec<(u32, f32)>,
     gradient: Vec<f32>,
     invalid: u64,
+    needed: Option<Arc<[bool]>>,
 }
 
 impl<'a> AdjointFilm<'a> {
@@ -56,7 +66,43 @@ impl<'a> AdjointFilm<'a> {
             entries,
             gradient: vec![0.0; entries],
             invalid: 0,
+            needed: None,
         }
+    }
+
+    /// The film with [`SampleSink::needs_pixel`] false for the pixels of a `width`-wide image whose
+    /// camera samples, each drawn within `reach` pixels of its pixel's centre and splatted within
+    /// `reach` of where it lands (the pixel filter's radius), cannot touch a pixel of non-zero adjoint:
+    /// every pixel farther than `⌈2 reach⌉ + 1` pixels (along x or y; one pixel of margin for
+    /// rounding) from all of them.
+    pub fn skipping_zero_adjoint(mut self, width: u32, reach: f32) -> Self {
+        let w = width.max(1) as usize;
+        let h = self.adjoint.len() / 3 / w;
+        let r = (2.0 * reach).ceil() as usize + 1;
+        // Separable dilation of the non-zero pixels by a square of side 2r + 1.
+        let mut rows = vec![false; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let g = &self.adjoint[3 * (y * w + x)..3 * (y * w + x) + 3];
+                if g != [0.0; 3] {
+                    for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
+                        rows[y * w + xx] = true;
+                    }
+                }
+            }
+        }
+        let mut needed = vec![false; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                if rows[y * w + x] {
+                    for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
+                        needed[yy * w + x] = true;
+                    }
+                }
+            }
+        }
+        self.needed = Some(needed.into());
+        self
     }
 }
 
@@ -73,6 +119,7 @@ impl<'a> Film for AdjointFilm<'a> {
             shares: Vec::new(),
             gradient: vec![0.0; self.entries],
             invalid: 0,
+            needed: self.needed.clone(),
         }
     }
 
@@ -117,6 +164,11 @@ impl AdjointTile<'_> {
 }
 
 impl SampleSink<Rev> for AdjointTile<'_> {
+    #[inline]
+    fn needs_pixel(&self, pixel: usize) -> bool {
+        self.needed.as_ref().is_none_or(|m| m[pixel])
+    }
+
     #[inline]
     fn add_own(&mut self, pixel: usize, radiance: Vec3<Rev>, weight: Rev) {
         self.add(pixel, radiance, weight);

@@ -62,16 +62,14 @@ pub fn window_slots(scene: &Scene, lo: usize, width: usize) -> Scene {
     };
     let mut s = scene.clone();
     s.visit_params_mut(&mut |_, p: &mut Param| p.slot = p.slot.and_then(window));
-    for shape in &mut s.shapes {
-        crate::scene::visit_selections_mut(shape, &mut |_, g| {
-            if let BlockValues::Direction { slot, .. } = g {
-                match window(*slot) {
-                    Some(k) => *slot = k,
-                    None => *g = BlockValues::Constant,
-                }
+    crate::scene::visit_scene_selections_mut(&mut s, &mut |_, g| {
+        if let BlockValues::Direction { slot, .. } = g {
+            match window(*slot) {
+                Some(k) => *slot = k,
+                None => *g = BlockValues::Constant,
             }
-        });
-    }
+        }
+    });
     s
 }
 

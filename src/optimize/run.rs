@@ -101,7 +101,7 @@ pub fn run(
     Optimization::new(scene.clone(), views.clone(), blank, settings.clone()).map_err(in_config)?;
     let grid_outputs: Vec<(String, PathBuf)> = match out {
         Some(out) => (settings.grids.iter())
-            .map(|node| (node.clone(), out.join(format!("{node}.npy"))))
+            .map(|node| (node.clone(), out.join(block_file(scene, node))))
             .collect(),
         None => Vec::new(),
     };
@@ -310,6 +310,13 @@ fn write_finals(
     let blocks = opt.scene.blocks();
     for (node, path) in grid_outputs {
         let writer: Writer = match blocks.iter().find(|b| b.node == *node) {
+            Some(b) if b.kind == BlockKind::Envmap => {
+                let (shape, values) = (
+                    b.shape.clone(),
+                    opt.scene.block_values(node).map_err(in_config)?,
+                );
+                Box::new(move |tmp| write_envmap(tmp, &shape, &values).map_err(file_message))
+            }
             Some(b) if b.kind != BlockKind::Grid => {
                 let (shape, values) = (
                     b.shape.clone(),
@@ -342,6 +349,27 @@ fn write_finals(
         }
     }
     Ok(written)
+}
+
+/// The output file of optimised block `node`: `NODE.exr` for an environment map (the format its
+/// `file` reads), `NODE.npy` otherwise.
+pub(crate) fn block_file(scene: &Scene, node: &str) -> String {
+    let envmap = (scene.blocks().iter()).any(|b| b.node == node && b.kind == BlockKind::Envmap);
+    format!("{node}.{}", if envmap { "exr" } else { "npy" })
+}
+
+/// Writes an environment map's values (shape `[H, W, 3]`) as an RGB EXR.
+fn write_envmap(path: &Path, shape: &[usize], values: &[f32]) -> Result<()> {
+    let (h, w) = (shape[0], shape[1]);
+    let channels: Vec<(String, Vec<f32>)> = (["R", "G", "B"].iter().enumerate())
+        .map(|(c, n)| {
+            (
+                n.to_string(),
+                values.iter().skip(c).step_by(3).copied().collect(),
+            )
+        })
+        .collect();
+    io::write_exr(path, w as u32, h as u32, &channels)
 }
 
 /// Whether the optimised block `node` is a grid, whose shape's mesh the run writes (a volume

@@ -39,11 +39,11 @@ pub struct Rev {
 }
 
 /// One thread's tape: per node the end of its operand list, and the operands (node index or
-/// `PARAM | entry`) with their partials.
+/// `PARAM | entry`, with its partial), side by side in one buffer (one push per operand, and the sweep
+/// reads both from one cache line).
 struct Tape {
     ends: Vec<u32>,
-    targets: Vec<u32>,
-    partials: Vec<f32>,
+    operands: Vec<(u32, f32)>,
     adjoints: Vec<f32>,
     active: bool,
 }
@@ -52,8 +52,7 @@ thread_local! {
     static TAPE: RefCell<Tape> = const {
         RefCell::new(Tape {
             ends: Vec::new(),
-            targets: Vec::new(),
-            partials: Vec::new(),
+            operands: Vec::new(),
             adjoints: Vec::new(),
             active: false,
         })
@@ -63,13 +62,12 @@ thread_local! {
 impl Tape {
     #[inline(always)]
     fn node(&mut self) -> u32 {
-        self.ends.push(self.targets.len() as u32);
+        self.ends.push(self.operands.len() as u32);
         (self.ends.len() - 1) as u32
     }
     #[inline(always)]
     fn operand(&mut self, target: u32, partial: f32) {
-        self.targets.push(target);
-        self.partials.push(partial);
+        self.operands.push((target, partial));
     }
 }
 
@@ -165,8 +163,7 @@ impl Recording {
             );
             t.active = true;
             t.ends.clear();
-            t.targets.clear();
-            t.partials.clear();
+            t.operands.clear();
         });
         Self {
             _thread: std::marker::PhantomData,
@@ -184,7 +181,7 @@ impl Recording {
             let t = t.borrow();
             Mark {
                 nodes: t.ends.len(),
-                operands: t.targets.len(),
+                operands: t.operands.len(),
             }
         })
     }
@@ -194,8 +191,7 @@ impl Recording {
         TAPE.with(|t| {
             let mut t = t.borrow_mut();
             t.ends.truncate(mark.nodes);
-            t.targets.truncate(mark.operands);
-            t.partials.truncate(mark.operands);
+            t.operands.truncate(mark.operands);
         });
     }
 
@@ -219,27 +215,34 @@ impl Recording {
         TAPE.with(|t| {
             let t = &mut *t.borrow_mut();
             let n = root.i as usize + 1;
-            t.adjoints.clear();
-            t.adjoints.resize(n, 0.0);
-            t.adjoints[n - 1] = 1.0;
+            let Tape {
+                ends,
+                operands,
+                adjoints,
+                ..
+            } = t;
+            adjoints.clear();
+            adjoints.resize(n, 0.0);
+            adjoints[n - 1] = 1.0;
+            let mut end = ends[n - 1] as usize;
             for node in (0..n).rev() {
-                let a = t.adjoints[node];
-                if a == 0.0 {
-                    continue;
-                }
                 let start = if node == 0 {
                     0
                 } else {
-                    t.ends[node - 1] as usize
+                    ends[node - 1] as usize
                 };
-                for op in start..t.ends[node] as usize {
-                    let (target, d) = (t.targets[op], a * t.partials[op]);
-                    if target & PARAM != 0 {
-                        out(target & !PARAM, d);
-                    } else {
-                        t.adjoints[target as usize] += d;
+                let a = adjoints[node];
+                if a != 0.0 {
+                    for &(target, partial) in &operands[start..end] {
+                        let d = a * partial;
+                        if target & PARAM != 0 {
+                            out(target & !PARAM, d);
+                        } else {
+                            adjoints[target as usize] += d;
+                        }
                     }
                 }
+                end = start;
             }
         });
     }
@@ -251,8 +254,7 @@ impl Drop for Recording {
             let mut t = t.borrow_mut();
             t.active = false;
             t.ends.clear();
-            t.targets.clear();
-            t.partials.clear();
+            t.operands.clear();
         });
     }
 }
@@ -445,6 +447,7 @@ impl Scalar for Rev {
         let [wx, wy, wz] = primal.weight;
         TAPE.with(|t| {
             let mut t = t.borrow_mut();
+            t.operands.reserve(64 + 12);
             if let Some(first) = block {
                 for c in 0..4 {
                     for b in 0..4 {

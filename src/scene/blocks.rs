@@ -2,16 +2,18 @@
 //! value. Two kinds: the samples of every grid node, named `<node>.values` (`<node>` the node's prefix
 //! of [`Scene::parameters`], e.g. `blob.values`, shape `[nz, ny, nx]`), and the texels of every volume
 //! texture, named `<name>.values` (`paint.values`, shape `[nz, ny, nx, 3]` for a colour, `[nz, ny, nx]`
-//! for a number). A block is selected for differentiation as a whole (a forward-mode direction or a
+//! for a number), and the texels of an environment map, named `<name>.values` (`<name>` the emitter's,
+//! shape `[H, W, 3]`, row 0 the zenith). A block is selected for differentiation as a whole (a forward-mode direction or a
 //! reverse-mode gradient block, [`BlockValues`]) and can be replaced in memory between renders.
 //!
-//! A new kind of block (an environment map's texels) is one more [`BlockKind`], one more arm in
-//! [`Scene::blocks`] and the selection walk ([`visit_selections_mut`]),
-//! and its values in [`Scene::block_values`] / [`Scene::set_block_values`].
+//! A new kind of block is one more [`BlockKind`], one more arm in [`Scene::blocks`] and the selection
+//! walk ([`visit_scene_selections_mut`]), and its values in [`Scene::block_values`] /
+//! [`Scene::set_block_values`].
 
 use super::params::root_prefix;
 use super::{Scene, Shape};
 use crate::declare;
+use crate::emitter::{Emitter, EnvMap};
 use crate::error::{Error, Result};
 use crate::scalar::BlockValues;
 use crate::sdf::{GridData, Sdf};
@@ -24,22 +26,35 @@ pub enum BlockKind {
     Grid,
     /// A volume texture's texels ([`crate::bsdf::Volume`]).
     Volume,
+    /// An environment map's texels ([`crate::emitter::EnvMap`]).
+    Envmap,
 }
 
-/// One parameter block: a grid's samples or a volume texture's texels.
+impl BlockKind {
+    /// What the block is, in words (`grid`, `volume texture`, `environment map`).
+    pub fn describe(self) -> &'static str {
+        match self {
+            BlockKind::Grid => "grid",
+            BlockKind::Volume => "volume texture",
+            BlockKind::Envmap => "environment map",
+        }
+    }
+}
+
+/// One parameter block: a grid's samples, a volume texture's or an environment map's texels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamBlock {
     /// What the block holds.
     pub kind: BlockKind,
-    /// The shape the block belongs to.
+    /// The shape the block belongs to (for an environment map, its emitter).
     pub shape_name: String,
-    /// The block's node: a grid node's prefix (`blob`) or a texture's name (`paint`), what `--grid`
-    /// and `--grid-direction` take.
+    /// The block's node: a grid node's prefix (`blob`), a texture's name (`paint`) or an environment
+    /// map emitter's (`sky`), what `--grid` and `--grid-direction` take.
     pub node: String,
     /// The block's name, `<node>.values`.
     pub name: String,
     /// The `.npy` shape of the values: `[nz, ny, nx]` for a grid or a scalar texture, `[nz, ny, nx,
-    /// 3]` for a colour texture.
+    /// 3]` for a colour texture, `[H, W, 3]` for an environment map.
     pub shape: Vec<usize>,
 }
 
@@ -110,11 +125,31 @@ grid_walk!(walk_mut, walk_mut, mut);
 
 /// Calls `f(node, selection)` for every block of `shape` (its grids, then its textures), to renumber
 /// or clear the selections.
-pub(crate) fn visit_selections_mut(shape: &mut Shape, f: &mut dyn FnMut(&str, &mut BlockValues)) {
+fn visit_selections_mut(shape: &mut Shape, f: &mut dyn FnMut(&str, &mut BlockValues)) {
     let prefix = root_prefix(&shape.name, &shape.sdf);
     walk_mut(&mut shape.sdf, &prefix, &mut |n, _, s, _| f(n, s));
     for t in &mut shape.textures {
         f(&t.volume.name, &mut t.volume.selection);
+    }
+}
+
+/// Calls `f(node, selection)` for every block of `scene`: its shapes' ([`visit_selections_mut`]),
+/// then its environment maps'. A map is copied only when its selection changes.
+pub(crate) fn visit_scene_selections_mut(
+    scene: &mut Scene,
+    f: &mut dyn FnMut(&str, &mut BlockValues),
+) {
+    for shape in &mut scene.shapes {
+        visit_selections_mut(shape, f);
+    }
+    for e in &mut scene.emitters {
+        if let Emitter::Envmap { map, .. } = &mut e.emitter {
+            let mut selection = map.selection().clone();
+            f(&e.name, &mut selection);
+            if selection != *map.selection() {
+                Arc::make_mut(map).set_selection(selection);
+            }
+        }
     }
 }
 
@@ -136,7 +171,7 @@ impl Sdf {
 
 impl Scene {
     /// Every parameter block, shape by shape (its grids in the order of [`Scene::parameters`],
-    /// then its material's textures).
+    /// then its material's textures), then the environment maps'.
     pub fn blocks(&self) -> Vec<ParamBlock> {
         let mut out = Vec::new();
         for shape in &self.shapes {
@@ -165,7 +200,26 @@ impl Scene {
                 });
             }
         }
+        for e in &self.emitters {
+            if let Emitter::Envmap { map, .. } = &e.emitter {
+                out.push(ParamBlock {
+                    kind: BlockKind::Envmap,
+                    shape_name: e.name.clone(),
+                    node: e.name.clone(),
+                    name: format!("{}.values", e.name),
+                    shape: map.shape(),
+                });
+            }
+        }
         out
+    }
+
+    /// The environment map emitter named `node`, if any.
+    fn envmap(&self, node: &str) -> Option<&EnvMap> {
+        self.emitters.iter().find_map(|e| match &e.emitter {
+            Emitter::Envmap { map, .. } if e.name == node => Some(&**map),
+            _ => None,
+        })
     }
 
     /// Every grid node's values as a block, in the order of [`Scene::parameters`] (the blocks of
@@ -177,8 +231,8 @@ impl Scene {
     }
 
     /// Every parameter (as [`Scene::parameters`] lists it) and every block: a grid's right after
-    /// its node's `level`, a texture's after its shape's last parameter (or at the end): the
-    /// listing of the `params` command.
+    /// its node's `level`, a texture's (an environment map's) after its shape's (emitter's) last
+    /// parameter (or at the end): the listing of the `params` command.
     pub fn parameter_entries(&self) -> Vec<ParameterEntry> {
         let params = self.parameters();
         let blocks = self.blocks();
@@ -188,7 +242,7 @@ impl Scene {
                     let level = format!("{}.level", b.node);
                     params.iter().position(|(n, _)| *n == level)
                 }
-                BlockKind::Volume => {
+                BlockKind::Volume | BlockKind::Envmap => {
                     let prefix = format!("{}.", b.shape_name);
                     params.iter().rposition(|(n, _)| n.starts_with(&prefix))
                 }
@@ -237,9 +291,12 @@ impl Scene {
         Ok(self.grid(node)?.0)
     }
 
-    /// The values of block `node` (a grid node or a texture) in its layout (C order of its shape).
-    /// Errors: no block of that name (the message lists them).
+    /// The values of block `node` (a grid node, a texture or an environment map) in its layout (C
+    /// order of its shape). Errors: no block of that name (the message lists them).
     pub fn block_values(&self, node: &str) -> Result<Arc<Vec<f32>>> {
+        if let Some(map) = self.envmap(node) {
+            return Ok(Arc::new(map.values()));
+        }
         for shape in &self.shapes {
             if let Some(t) = shape.textures.iter().find(|t| t.volume.name == node) {
                 return Ok(t.volume.values.clone());
@@ -249,8 +306,21 @@ impl Scene {
     }
 
     /// Replaces the values of block `node` (same layout and count, all finite; a texture's in its
-    /// field's range) and recomputes what depends on them.
+    /// field's range, an environment map's `>= 0`) and recomputes what depends on them (an
+    /// environment map's sampling tables).
     pub fn set_block_values(&mut self, node: &str, values: Vec<f32>) -> Result<()> {
+        if let Some(old) = self.envmap(node) {
+            let map = (old.with_values(&values))
+                .map_err(|m| Error::field(format!("{node}.values"), m))?;
+            for e in &mut self.emitters {
+                if let Emitter::Envmap { map: slot, .. } = &mut e.emitter
+                    && e.name == node
+                {
+                    *slot = Arc::new(map.clone());
+                }
+            }
+            return Ok(());
+        }
         let mut texture = None;
         for (i, shape) in self.shapes.iter().enumerate() {
             if let Some(k) = shape.textures.iter().position(|t| t.volume.name == node) {
@@ -283,8 +353,12 @@ impl Scene {
         Ok(())
     }
 
-    /// The range of the values of volume texture `node` (its field's), `None` for any other name.
+    /// The range of the values of volume texture `node` (its field's) or of environment map `node`
+    /// (`[0, f32::MAX]`), `None` for any other name (a grid's).
     pub fn texture_range(&self, node: &str) -> Option<(f32, f32)> {
+        if self.envmap(node).is_some() {
+            return Some((0.0, f32::MAX));
+        }
         self.shapes.iter().find_map(|shape| {
             (shape.textures.iter())
                 .find(|t| t.volume.name == node)
@@ -378,14 +452,12 @@ impl Scene {
                 ));
             }
         }
-        for shape in &mut self.shapes {
-            visit_selections_mut(shape, &mut |n, s| {
-                *s = selection
-                    .iter()
-                    .find(|(node, _)| node == n)
-                    .map_or(BlockValues::Constant, |(_, how)| how.clone());
-            });
-        }
+        visit_scene_selections_mut(self, &mut |n, s| {
+            *s = selection
+                .iter()
+                .find(|(node, _)| node == n)
+                .map_or(BlockValues::Constant, |(_, how)| how.clone());
+        });
         Ok(())
     }
 
@@ -393,11 +465,18 @@ impl Scene {
     pub(super) fn unknown_grid(&self, node: &str) -> Error {
         let blocks = self.blocks();
         let textures = blocks.iter().any(|b| b.kind != BlockKind::Grid);
+        let envmaps = blocks.iter().any(|b| b.kind == BlockKind::Envmap);
         let nodes: Vec<String> = blocks.into_iter().map(|b| b.node).collect();
-        let known = match (nodes.is_empty(), textures) {
-            (true, _) => "the scene has no grid".to_string(),
-            (false, false) => format!("grid nodes: {}", nodes.join(", ")),
-            (false, true) => format!("grid nodes and volume textures: {}", nodes.join(", ")),
+        let known = match (nodes.is_empty(), textures, envmaps) {
+            (true, _, _) => "the scene has no grid".to_string(),
+            (false, false, _) => format!("grid nodes: {}", nodes.join(", ")),
+            (false, true, false) => {
+                format!("grid nodes and volume textures: {}", nodes.join(", "))
+            }
+            (false, true, true) => format!(
+                "blocks of grid nodes, volume textures and environment maps: {}",
+                nodes.join(", ")
+            ),
         };
         Error::field("grids", format!("no grid node {node:?} ({known})"))
     }

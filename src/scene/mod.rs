@@ -12,7 +12,7 @@ mod reach;
 mod selection;
 pub mod settings;
 
-pub(crate) use blocks::visit_selections_mut;
+pub(crate) use blocks::visit_scene_selections_mut;
 pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};
 pub use bvh::Bvh;
 pub use integrator_kind::IntegratorKind;
@@ -296,6 +296,10 @@ pub struct Scene {
 /// smallest extent (along any axis) of any finite shape's bounds ([`crate::trace::TraceSettings`]).
 pub const RELATIVE_EPS: f32 = 1e-4;
 
+/// How far [`Scene::crease_region`] reaches beyond the scene's finite content, in units of that
+/// content's longest side (on every side).
+pub const CREASE_REGION_MARGIN: f32 = 2.0;
+
 impl Scene {
     /// Assembles a scene and derives the tracer's tolerance floor from its smallest shape (the smallest
     /// extent of a finite shape's bounds; without one, the distance from the camera to its target).
@@ -357,12 +361,40 @@ impl Scene {
     /// cylinders' rims, and the chords of the curves where hard CSG children cross), as
     /// `(shape index, edge)` with the edge in the shape's own coordinates (add its `translate` for world
     /// coordinates). Extracts the CSG crossings: cost grows with their number.
+    /// Creases between unbounded children (two planes) are extracted within [`Scene::crease_region`].
     pub fn creased_shapes(&self) -> Vec<(usize, crate::sdf::CreaseEdge)> {
-        self.shapes
-            .iter()
-            .enumerate()
-            .flat_map(|(i, s)| s.sdf.crease_edges().into_iter().map(move |e| (i, e)))
+        let region = self.crease_region();
+        let region = &region;
+        (self.shapes.iter().enumerate())
+            .flat_map(|(i, s)| {
+                let t = s.translate.value();
+                let local = Aabb::new(region.min - t, region.max - t);
+                (s.sdf.crease_edges_within(&local).into_iter()).map(move |e| (i, e))
+            })
             .collect()
+    }
+
+    /// The box (world coordinates) within which the creases that no finite box of their shape holds
+    /// (two planes crossing, [`Sdf::unsampled_creases`]) are extracted and sampled: the box of the
+    /// scene's finite content (bounded shapes, the camera's origin, the area and point lights) grown on
+    /// every side by [`CREASE_REGION_MARGIN`] times its longest side.
+    pub fn crease_region(&self) -> Aabb {
+        let point = |p: glam::Vec3| Aabb::new(p, p);
+        let eye = self.camera.origin.value();
+        let mut content = point(eye);
+        for s in self.shapes.iter().filter(|s| s.bounds.is_finite()) {
+            content = content.union(&s.bounds);
+        }
+        for e in &self.emitters {
+            if let Some(b) = e.emitter.bounds() {
+                content = content.union(&b);
+            }
+            if let Emitter::Point { position, .. } = &e.emitter {
+                content = content.union(&point(position.value()));
+            }
+        }
+        let size = content.extent().max_element().max(f32::MIN_POSITIVE);
+        content.expanded(CREASE_REGION_MARGIN * size)
     }
 
     /// Whether any shape has crease edges ([`Sdf::has_crease_edges`]), without extracting them.
@@ -370,27 +402,24 @@ impl Scene {
         self.shapes.iter().any(|s| s.sdf.has_crease_edges())
     }
 
-    /// The shapes with crease curves whose boundary terms are not sampled, as `(shape name, reason)`
-    /// ([`Sdf::unsampled_creases`]: hard CSG of unbounded children; and under a point or directional
-    /// light every crease, whose hard shadow edges the delta lights' term does not sample):
-    /// derivatives that move those curves (any geometric parameter of the scene, through the camera,
-    /// the lights or the shape) miss those terms.
+    /// The shapes with crease curves whose boundary terms are not sampled whole, as `(shape name,
+    /// reason)` ([`Sdf::unsampled_creases`]: hard CSG of unbounded children that nothing bounds, sampled
+    /// only within [`Scene::crease_region`]): derivatives that move those curves beyond it (any
+    /// geometric parameter of the scene, through the camera, the lights or the shape) miss those terms.
+    /// The edges of sharp boxes and cylinders and bounded hard CSG creases are sampled, seen from the
+    /// camera, past area lights and from delta lights alike.
     pub fn unsampled_creases(&self) -> Vec<(String, String)> {
-        let delta = self.emitters.iter().any(|e| e.emitter.is_delta());
+        let region = self.crease_region();
+        let corner = |p: glam::Vec3| format!("[{:.3}, {:.3}, {:.3}]", p.x, p.y, p.z);
+        let within = format!(
+            "sampled only within {} to {}",
+            corner(region.min),
+            corner(region.max)
+        );
         self.shapes
             .iter()
             .filter_map(|s| {
-                let under_delta = || {
-                    (s.sdf.creases())
-                        .map(|r| format!("{r}, its shadows from point and directional lights"))
-                };
-                let reason = s.sdf.unsampled_creases();
-                let reason = if delta {
-                    reason.or_else(under_delta)
-                } else {
-                    reason
-                };
-                reason.map(|r| (s.name.clone(), r))
+                (s.sdf.unsampled_creases()).map(|r| (s.name.clone(), format!("{r}, {within}")))
             })
             .collect()
     }
@@ -527,7 +556,7 @@ mod tests {
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|(i, _)| *i == 1));
         // The sharp box's edges are sampled; so are bounded hard CSG creases (as chords of the
-        // extracted curve), but not those of unbounded children.
+        // extracted curve); those of unbounded children within the crease region only.
         assert!(scene.unsampled_creases().is_empty());
         scene.shapes.push(Shape::new(
             "lens",
@@ -564,13 +593,38 @@ mod tests {
             ]),
             bsdf.clone(),
         ));
-        assert_eq!(
-            scene.unsampled_creases(),
-            vec![(
-                "wedge".to_string(),
-                "hard intersection of unbounded children (planes) whose surfaces cross".to_string()
-            )]
+        let region = scene.crease_region();
+        let named = scene.unsampled_creases();
+        assert_eq!(named.len(), 1);
+        assert_eq!(named[0].0, "wedge");
+        assert!(
+            named[0].1.starts_with(
+                "hard CSG of unbounded children (planes) whose crease no bounded child cuts, \
+                 sampled only within ["
+            ),
+            "{named:?}"
         );
+        // The planes' crease (the z axis) is extracted as chords across the whole region.
+        let axis: Vec<_> = (scene.creased_shapes().into_iter())
+            .filter(|(i, _)| *i == 3)
+            .collect();
+        let length: f32 = axis.iter().map(|(_, e)| e.curve.length()).sum();
+        let across = region.max.z - region.min.z;
+        assert!((length / across - 1.0).abs() < 0.05, "{length} of {across}");
+        // Cut by a ball, the same crease needs no region: the ball's box holds it.
+        let cut = Sdf::Intersection(vec![
+            Sdf::Plane {
+                normal: glam::Vec3::Y,
+                offset: 0.0.into(),
+            },
+            Sdf::Plane {
+                normal: glam::Vec3::X,
+                offset: 0.0.into(),
+            },
+            Sdf::sphere([0.0, 0.0, 0.0], 1.0),
+        ]);
+        assert_eq!(cut.unsampled_creases(), None);
+        assert!(!cut.crossing_creases().is_empty());
     }
 
     #[test]

@@ -9,7 +9,7 @@
 //! [`BlockValues`], which the scalar type lifts when the scene is evaluated
 //! ([`crate::scalar::Scalar::lift`]).
 
-use super::{BlockKind, GridDirection, ParamBlock, Scene};
+use super::{GridDirection, ParamBlock, Scene};
 use crate::error::{Error, Result};
 use crate::scalar::BlockValues;
 
@@ -134,10 +134,7 @@ impl Scene {
                     shape: direction.shape.clone(),
                     ..block.clone()
                 };
-                let what = match block.kind {
-                    BlockKind::Grid => "grid",
-                    BlockKind::Volume => "volume texture",
-                };
+                let what = block.kind.describe();
                 return Err(Error::file(
                     &direction.source,
                     format!(

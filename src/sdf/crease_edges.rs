@@ -142,14 +142,30 @@ impl Placement {
     fn scale(&self) -> f32 {
         self.0.iter().map(Similarity::scale).product()
     }
+
+    /// The box holding the finite box `b` (a node's coordinates) in the tree's coordinates.
+    fn bounds(&self, b: &Aabb) -> Aabb {
+        (b.corners().into_iter())
+            .map(|c| self.point(c))
+            .fold(Aabb::EMPTY, |b, p| b.union(&Aabb::new(p, p)))
+    }
 }
 
 impl Sdf {
     /// The crease edges of the sharp boxes and cylinders in this tree (see the module docs of `sdf::crease_edges`), and
     /// the chords of the curves where hard CSG children cross ([`super::CrossingCrease::chords`], with
-    /// the default extraction settings), in this node's coordinates. Empty when there are none.
+    /// the default extraction settings), in this node's coordinates. Empty when there are none. Creases
+    /// between unbounded children that nothing in the tree bounds are left out: see
+    /// [`Sdf::crease_edges_within`].
     pub fn crease_edges(&self) -> Vec<CreaseEdge> {
-        let found = self.find_creases();
+        self.crease_edges_within(&Aabb::INFINITE)
+    }
+
+    /// [`Sdf::crease_edges`], with the creases between unbounded children (two planes) that nothing in
+    /// the tree bounds extracted within `region` (this node's coordinates; a finite box, or
+    /// [`Aabb::INFINITE`] to leave them out).
+    pub fn crease_edges_within(&self, region: &Aabb) -> Vec<CreaseEdge> {
+        let found = self.find_creases(region);
         let mut edges = found.edges;
         for crossing in &found.crossings {
             edges.extend(crossing.chords(self, &CurveOptions::default()));
@@ -158,22 +174,38 @@ impl Sdf {
     }
 
     /// Whether this tree has crease edges ([`Sdf::crease_edges`] not empty, or only curves too small
-    /// for extraction to find), without extracting the crossings.
+    /// for extraction to find, or creases between unbounded children), without extracting the crossings.
     pub fn has_crease_edges(&self) -> bool {
-        let found = self.find_creases();
-        !(found.edges.is_empty() && found.crossings.is_empty())
+        let found = self.find_creases(&Aabb::INFINITE);
+        !(found.edges.is_empty() && found.crossings.is_empty() && found.unbounded == 0)
     }
 
     /// The creases where two children of a hard CSG node cross, in this node's coordinates, before
-    /// extraction.
+    /// extraction (those between unbounded children as [`Sdf::crease_edges_within`] bounds them).
+    pub fn crossing_creases_within(&self, region: &Aabb) -> Vec<CrossingCrease> {
+        self.find_creases(region).crossings
+    }
+
+    /// The creases where two children of a hard CSG node cross, in this node's coordinates, before
+    /// extraction (without those between unbounded children that nothing in the tree bounds).
     pub fn crossing_creases(&self) -> Vec<CrossingCrease> {
-        self.find_creases().crossings
+        self.crossing_creases_within(&Aabb::INFINITE)
+    }
+
+    /// The number of pairs of crossing children whose crease nothing in the tree bounds (two planes
+    /// not cut by a bounded sibling or ancestor): [`Sdf::crease_edges_within`] needs a region for them.
+    pub fn unbounded_crossings(&self) -> usize {
+        self.find_creases(&Aabb::INFINITE).unbounded
     }
 
     /// The primitives' edges in closed form and the CSG crossings still to be extracted.
-    fn find_creases(&self) -> Found {
+    fn find_creases(&self, region: &Aabb) -> Found {
         let mut out = Found::default();
-        collect(self, &mut Walk::default(), &mut out);
+        let mut walk = Walk {
+            region: *region,
+            ..Walk::default()
+        };
+        collect(self, &mut walk, &mut out);
         out
     }
 
@@ -270,13 +302,28 @@ impl Sdf {
     }
 }
 
-/// Where [`collect`] is in the tree: the CSG children taken, the transforms above, and whether the
-/// solid is inverted (inside a subtracted child).
-#[derive(Default)]
+/// Where [`collect`] is in the tree: the CSG children taken, the transforms above, whether the
+/// solid is inverted (inside a subtracted child), the box the CSG nodes above leave the surface in
+/// (`clip`, the intersection of their bounds), and the region given for unbounded creases, both in the
+/// tree's coordinates.
 struct Walk {
     path: Vec<usize>,
     place: Placement,
     inverted: bool,
+    clip: Aabb,
+    region: Aabb,
+}
+
+impl Default for Walk {
+    fn default() -> Self {
+        Self {
+            path: Vec::new(),
+            place: Placement::default(),
+            inverted: false,
+            clip: Aabb::INFINITE,
+            region: Aabb::INFINITE,
+        }
+    }
 }
 
 /// What [`collect`] finds.
@@ -284,6 +331,8 @@ struct Walk {
 struct Found {
     edges: Vec<CreaseEdge>,
     crossings: Vec<CrossingCrease>,
+    /// Pairs of crossing children whose crease neither the tree nor the region bounds (not listed).
+    unbounded: usize,
 }
 
 fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
@@ -306,7 +355,14 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
         | Sdf::Difference(children)
         | Sdf::SmoothUnion { children, .. } => {
             let subtracts = matches!(node, Sdf::Difference(_));
-            push_crossings(node, walk, &mut out.crossings);
+            // The node's surface lies in its bounds: a bounded child of an intersection (a ball)
+            // bounds the crease of two planes beside it, and those of the CSG nodes below.
+            let above = walk.clip;
+            let bounds = node.bounds();
+            if bounds.is_finite() {
+                walk.clip = walk.clip.intersection(&walk.place.bounds(&bounds));
+            }
+            push_crossings(node, walk, out);
             for (i, c) in children.iter().enumerate() {
                 let flip = subtracts && i > 0;
                 walk.path.push(i);
@@ -315,6 +371,7 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
                 walk.inverted ^= flip;
                 walk.path.pop();
             }
+            walk.clip = above;
         }
         Sdf::Box {
             center,
@@ -382,8 +439,9 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
 }
 
 /// The crossings of `node`'s children if it is a hard CSG node (see [`CrossingCrease`] for the faces'
-/// signs): each pair whose surfaces may meet inside a bounded common box.
-fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Vec<CrossingCrease>) {
+/// signs): each pair whose surfaces may meet inside a bounded common box, or, for two unbounded
+/// children, inside the box the CSG nodes above leave (`walk.clip`), else inside the region given.
+fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Found) {
     // Locally the solid is {F_a < 0 and F_b < 0} (convex) or, inverted, its complement.
     let (children, negate, inverted): (&[Sdf], fn(usize) -> bool, bool) = match node {
         Sdf::Intersection(c) => (c, |_| false, false),
@@ -393,13 +451,22 @@ fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Vec<CrossingCrease>) {
         _ => return,
     };
     for (i, j, common) in crossing_pairs(children) {
-        if !common.is_finite() {
+        let bounds = if common.is_finite() {
+            walk.place.bounds(&common)
+        } else if walk.clip.is_finite() {
+            walk.clip
+        } else {
+            let bounds = walk.region.intersection(&walk.clip);
+            if !bounds.is_finite() {
+                out.unbounded += 1;
+                continue;
+            }
+            bounds
+        };
+        if bounds.is_empty() {
             continue;
         }
-        let bounds = (common.corners().into_iter())
-            .map(|c| walk.place.point(c))
-            .fold(Aabb::EMPTY, |b, p| b.union(&Aabb::new(p, p)));
-        out.push(CrossingCrease {
+        out.crossings.push(CrossingCrease {
             path: walk.path.clone(),
             faces: [i, j].map(|index| Face::Child {
                 index,

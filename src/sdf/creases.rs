@@ -2,9 +2,9 @@
 //! crease seen from the camera or from a light is a boundary curve of its own (its image moves with the
 //! parameters, and the visibility jumps across it), which the silhouette-based boundary terms do not
 //! sample. The edges of sharp primitives and the crossings of hard CSG children with bounded common
-//! boxes have their own estimators ([`Sdf::crease_edges`]); where a derivative is requested through a
-//! crease no estimator samples (hard CSG of unbounded children, [`Sdf::unsampled_creases`]), the
-//! caller must warn that those terms are missing rather than drop them silently.
+//! boxes have their own estimators ([`Sdf::crease_edges`]); a crease no finite box in the tree holds
+//! (hard CSG of unbounded children, [`Sdf::unsampled_creases`]) is sampled within a region the caller
+//! chooses, who must say that the terms beyond it are missing rather than drop them silently.
 //!
 //! - **Primitives**: a box or a cylinder with `rounding = 0` has sharp edges (the box's twelve edges, the
 //!   cylinder's two rims). Spheres, tori, capsules and planes have none (the capsule is C1 where its
@@ -35,54 +35,57 @@ impl Sdf {
     /// reported). Transforms, names (prefixed `"name: "`) and smooth unions keep their children's
     /// creases.
     pub fn creases(&self) -> Option<String> {
-        self.crease_reasons(false)
+        self.crease_reasons()
     }
 
-    /// The crease curves of this node whose boundary terms the estimators do not sample: the creases of
-    /// hard CSG whose children's surfaces may cross in an unbounded region (two planes), where no
-    /// finite box holds the curve (the edges of sharp boxes, the rims of sharp cylinders and bounded
-    /// crossings are sampled, [`Sdf::crease_edges`]). `None` when nothing is missing.
+    /// The crease curves of this node that no finite box in the tree holds: the creases where two
+    /// unbounded children of hard CSG cross (two planes) and no bounded child or ancestor cuts them
+    /// ([`Sdf::unbounded_crossings`]). The estimators sample them only within a region the caller
+    /// gives ([`Sdf::crease_edges_within`]); the edges of sharp boxes, the rims of sharp cylinders and
+    /// bounded crossings are sampled whole. `None` when there are none.
     pub fn unsampled_creases(&self) -> Option<String> {
-        self.crease_reasons(true)
+        (self.unbounded_crossings() > 0).then(|| {
+            "hard CSG of unbounded children (planes) whose crease no bounded child cuts".into()
+        })
     }
 
-    /// All reasons, or with `unsampled` only those of creases the estimators do not sample.
-    fn crease_reasons(&self, unsampled: bool) -> Option<String> {
+    /// All reasons.
+    fn crease_reasons(&self) -> Option<String> {
         let mut reasons = Vec::new();
-        self.collect_creases(unsampled, &mut reasons);
+        self.collect_creases(&mut reasons);
         reasons.dedup();
         (!reasons.is_empty()).then(|| reasons.join("; "))
     }
 
-    /// Pushes this node's crease reasons; with `unsampled`, only those the estimators do not sample.
-    fn collect_creases(&self, unsampled: bool, out: &mut Vec<String>) {
+    /// Pushes this node's crease reasons.
+    fn collect_creases(&self, out: &mut Vec<String>) {
         let mut push = |s: String| {
             if !out.contains(&s) {
                 out.push(s);
             }
         };
         match self {
-            Sdf::Box { rounding, .. } if rounding.value <= 0.0 && !unsampled => {
+            Sdf::Box { rounding, .. } if rounding.value <= 0.0 => {
                 push("sharp box (rounding 0)".into());
             }
-            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 && !unsampled => {
+            Sdf::Cylinder { rounding, .. } if rounding.value <= 0.0 => {
                 push("cylinder with sharp rims (rounding 0)".into());
             }
-            Sdf::Union(children) => hard_csg(children, "union", unsampled, out),
-            Sdf::Intersection(children) => hard_csg(children, "intersection", unsampled, out),
-            Sdf::Difference(children) => hard_csg(children, "difference", unsampled, out),
+            Sdf::Union(children) => hard_csg(children, "union", out),
+            Sdf::Intersection(children) => hard_csg(children, "intersection", out),
+            Sdf::Difference(children) => hard_csg(children, "difference", out),
             Sdf::SmoothUnion { children, k } if k.value <= 0.0 => {
-                hard_csg(children, "smooth union with k = 0, i.e.", unsampled, out);
+                hard_csg(children, "smooth union with k = 0, i.e.", out);
             }
             Sdf::SmoothUnion { children, .. } => {
                 for c in children {
-                    c.collect_creases(unsampled, out);
+                    c.collect_creases(out);
                 }
             }
-            Sdf::Transform { child, .. } => child.collect_creases(unsampled, out),
+            Sdf::Transform { child, .. } => child.collect_creases(out),
             Sdf::Named { name, child } => {
                 let mut inner = Vec::new();
-                child.collect_creases(unsampled, &mut inner);
+                child.collect_creases(&mut inner);
                 for r in inner {
                     let r = format!("{name}: {r}");
                     if !out.contains(&r) {
@@ -95,23 +98,13 @@ impl Sdf {
     }
 }
 
-/// The children's own creases, then one reason for the node if two children's surfaces may cross
-/// (with `unsampled`, only where they may cross in an unbounded region, which extraction cannot
-/// search).
-fn hard_csg(children: &[Sdf], op: &str, unsampled: bool, out: &mut Vec<String>) {
+/// The children's own creases, then one reason for the node if two children's surfaces may cross.
+fn hard_csg(children: &[Sdf], op: &str, out: &mut Vec<String>) {
     for c in children {
-        c.collect_creases(unsampled, out);
+        c.collect_creases(out);
     }
-    let pairs = crossing_pairs(children);
-    let r = if unsampled {
-        (pairs.iter().any(|(.., common)| !common.is_finite()))
-            .then(|| format!("hard {op} of unbounded children (planes) whose surfaces cross"))
-    } else {
-        (!pairs.is_empty()).then(|| format!("hard {op} of children whose surfaces cross"))
-    };
-    if let Some(r) = r
-        && !out.contains(&r)
-    {
+    let r = format!("hard {op} of children whose surfaces cross");
+    if !crossing_pairs(children).is_empty() && !out.contains(&r) {
         out.push(r);
     }
 }

@@ -61,7 +61,8 @@
 //!
 //! The shadows of crease edges are the secondary term's ([`super::crease_shadows`]), the tear at
 //! vertices after the first [`super::crease_tears`]'s. Not included: the creases between unbounded
-//! CSG children ([`crate::scene::Scene::unsampled_creases`] lists them).
+//! CSG children beyond the scene's crease region ([`crate::scene::Scene::unsampled_creases`] lists
+//! them).
 //!
 //! # Thin wedges
 //!

@@ -108,9 +108,7 @@ impl CreaseSegment {
 
     /// `c` of (B1): `c·u > 0` for a displacement `u` of the line that clears the edge.
     pub fn clearing(&self) -> glam::Vec3 {
-        let w = self.omega();
-        let [a, b] = self.grads;
-        a / a.dot(w).abs() + b / b.dot(w).abs()
+        clearing(self.grads, self.omega())
     }
 
     /// `T⊥/|T⊥|`: the direction across the line in the plane of the line and the edge.
@@ -187,18 +185,39 @@ impl CreaseSegment {
         if !(rate > 0.0 && rate.is_finite()) {
             return S::zero();
         }
-        let w = self.omega();
-        let y = x_s + (x_d - x_s) * S::constant(t_b) - shape.translate.get::<S>();
-        let face = |f: usize| -> Option<S> {
-            let v = shape.sdf.face_value(&edge.path, edge.faces[f], y)?;
-            Some(v / self.grads[f].dot(w).abs())
-        };
-        let (Some(a), Some(b)) = (face(0), face(1)) else {
+        let y = x_s + (x_d - x_s) * S::constant(t_b);
+        let Some(h) = clearing_residual(shape, edge, self.grads, self.omega(), y) else {
             return S::zero();
         };
-        let h = a + b;
         -(h - h.detach()) / rate
     }
+}
+
+/// `c` of (B1) for a line along `w` past an edge whose faces have the gradients `grads` there:
+/// `∇F_a / |∇F_a·w| + ∇F_b / |∇F_b·w|`, orthogonal to `w` and to the edge when the faces lie on
+/// opposite sides of the line.
+pub(crate) fn clearing(grads: [glam::Vec3; 2], w: glam::Vec3) -> glam::Vec3 {
+    let [a, b] = grads;
+    a / a.dot(w).abs() + b / b.dot(w).abs()
+}
+
+/// The residual `F_a(y)/|∇F_a·w| + F_b(y)/|∇F_b·w|` at the world point `y` with `shape`'s lifted
+/// parameters (module docs, "The velocity"): to first order `c·u`, `u` the offset of `y` from the
+/// moved edge across the line along `w` (`grads` the faces' gradients at the edge point, as in
+/// [`clearing`]). `None` where a face does not evaluate.
+pub(crate) fn clearing_residual<S: Scalar>(
+    shape: &Shape,
+    edge: &CreaseEdge,
+    grads: [glam::Vec3; 2],
+    w: glam::Vec3,
+    y: Vec3<S>,
+) -> Option<S> {
+    let y = y - shape.translate.get::<S>();
+    let face = |f: usize| -> Option<S> {
+        let v = shape.sdf.face_value(&edge.path, edge.faces[f], y)?;
+        Some(v / grads[f].dot(w).abs())
+    };
+    Some(face(0)? + face(1)?)
 }
 
 #[cfg(test)]

@@ -33,7 +33,9 @@
 //!   Σ_f Σ_{k ≥ 2} W_k · L^{(D−k)}(ω) |n_f·ω| / p(ω) · (ẋ_C·m_f) · Λ                                  (2)
 //! ```
 //!
-//! splatted where each camera connection projects.
+//! splatted where each camera connection projects. Delta lights, which no sampled direction reaches,
+//! add their light at `x_C` as next-event estimation finds it: `L |n_f·ω| / p(ω)` becomes the
+//! irradiance `E(x_C)` towards the light, if visible, for every delta light.
 
 use super::crease_edges::{CreaseEdges, face_gradient, moving_edge_point};
 use super::crease_shadows::sample_direction;
@@ -41,7 +43,7 @@ use super::source::{BoundarySource, Pass, Scratch};
 use super::subpaths::{camera_side, radiance_by_depth};
 use super::{finite_splat, splat_on_film};
 use crate::film::SampleSink;
-use crate::integrator::path::TraceCounters;
+use crate::integrator::path::{TraceCounters, occluded};
 use crate::math::{Ray, Vec3};
 use crate::sampler::Sampler;
 use crate::scalar::Directions;
@@ -143,6 +145,17 @@ fn sample<S: Directions>(
         if across.dot(grads[1 - f]) < 0.0 {
             across = -across;
         }
+        let rate = velocity.dot(Vec3::constant(across));
+        delta_lights(
+            scene,
+            (m, x, n),
+            pt.weight,
+            rate,
+            sampler,
+            scratch,
+            splats,
+            counters,
+        );
         let Some((w, pdf)) = sample_direction(scene, x, sampler) else {
             continue;
         };
@@ -212,11 +225,77 @@ fn sample<S: Directions>(
             &mut scratch.cams,
             counters,
         );
-        let rate = velocity.dot(Vec3::constant(across));
         for cam in scratch.cams.iter().filter(|c| c.depth >= 2) {
             // x_C is the k-th scattering vertex: the radiance after it has at most D − k more.
             let l = constant.unwrap_or_else(|| scratch.by_depth[(depth - cam.depth) as usize]);
             let scale = cam.f * l * (cos / pdf * cam.j_film * pt.weight);
+            if scale == glam::Vec3::ZERO || !scale.is_finite() {
+                continue;
+            }
+            let value = Vec3::<S>::constant(scale) * rate;
+            if finite_splat(&value, S::zero()) {
+                splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), splats);
+            }
+        }
+    }
+}
+
+/// The delta lights' part of eq. (2) at the edge point `x` of face `n` (shape `m`): no sampled
+/// direction reaches a delta light, so each one's light arriving at `x` is added as the path
+/// integrator's next-event estimation finds it (the one direction towards it, density 1, visibility
+/// tested), `L |n·ω| / p(ω)` becoming the irradiance `E(x)` ([`crate::emitter::delta`]), with the
+/// camera side connected at depths `2 ≤ k ≤ D` (the light ends the path). `weight` is `Λ` (the edge
+/// point's `1/p`), `rate` the sliding `ẋ_C·m_f`.
+#[allow(clippy::too_many_arguments)]
+fn delta_lights<S: Directions>(
+    scene: &Scene,
+    (m, x, n): (usize, glam::Vec3, glam::Vec3),
+    weight: f32,
+    rate: S,
+    sampler: &mut Sampler,
+    scratch: &mut Scratch,
+    splats: &mut dyn SampleSink<S>,
+    counters: &mut TraceCounters,
+) {
+    let depth = scene.integrator.max_scatter();
+    let frame = scene.camera.frame::<f32>();
+    for light in scene.emitters.iter().map(|e| &e.emitter) {
+        if !light.is_delta() {
+            continue;
+        }
+        let Some(es) = light.sample_delta_li(x) else {
+            continue;
+        };
+        let cos = n.dot(es.wi);
+        if cos.is_nan() || cos <= 0.0 {
+            continue;
+        }
+        let o = scene.offset_origin(m, x, n, es.wi);
+        let (t_max, irradiance) = if es.dist.is_finite() {
+            let d2 = es.dist * es.dist;
+            ((es.p - o).dot(es.wi), light.mean_radiance() / d2)
+        } else {
+            (f32::INFINITY, light.mean_radiance())
+        };
+        let ray = Ray::new(o, es.wi);
+        let leaving = scene.leaving(m, n, es.wi);
+        if occluded(scene, &ray, t_max, None, leaving, counters) {
+            continue;
+        }
+        camera_side(
+            scene,
+            &frame,
+            m,
+            x,
+            n,
+            es.wi,
+            depth,
+            sampler,
+            &mut scratch.cams,
+            counters,
+        );
+        for cam in scratch.cams.iter().filter(|c| c.depth >= 2) {
+            let scale = cam.f * irradiance * (cos * cam.j_film * weight);
             if scale == glam::Vec3::ZERO || !scale.is_finite() {
                 continue;
             }

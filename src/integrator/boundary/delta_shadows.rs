@@ -90,8 +90,10 @@
 //! includes the BSDF at `x_D` towards the light. `direct` is `k = 1`.
 //!
 //! **Scope.** Smooth silhouettes of curved shapes with finite bounds (the shapes the primary term
-//! extracts curves for). Not included: the crease edges of sharp boxes, cylinders and hard CSG seen
-//! from a delta light (prefer rounded variants under delta lights when differentiating).
+//! extracts curves for). The crease edges of sharp boxes, cylinders and hard CSG seen from a delta
+//! light are [`super::delta_creases`]'s, through the same estimator ([`shadow_edge`]): a point on any
+//! shadow-casting curve, the direction across the light's ray towards its clear side and the rate of
+//! the occluder's residual there are all it needs.
 
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::subpath_sampler;
@@ -194,7 +196,7 @@ impl DeltaShadows {
         counters: &mut TraceCounters,
         sink: &mut dyn SampleSink<S>,
     ) {
-        let (scene, attach) = (pass.scene, &pass.attach);
+        let scene = pass.scene;
         let k = self.curves.len();
         let pick = ((sampler.next_1d() * k as f32) as usize).min(k - 1);
         let (e, m, curve) = (
@@ -223,90 +225,154 @@ impl DeltaShadows {
         if !(grad_len > 0.0 && grad_len.is_finite()) {
             return;
         }
-        let n_b = grad / grad_len;
-        // The light's position (a point light) and the distance from it to x_B, eqs. (4), (5).
-        let light = match curve.view {
-            View::Point(y) => Some((y, x_b.distance(y))),
-            View::Along(_) => None,
+        let point = ShadowEdgePoint {
+            light: *e,
+            x_b,
+            clear: grad / grad_len,
+            steepness: grad_len,
+            omega,
+            tangent: cs.tangent,
+            choices: k as f32,
+            pdf: cs.pdf as f32,
         };
-        let magnitude = light.map_or(0.0, |(y, _)| y.abs().max_element());
-        let eps = scene.trace.eps_at(x_b.abs().max_element().max(magnitude));
-        let x_off = x_b + n_b * (OFFSET_TOLERANCES * eps);
-        // The light must reach x_B's clear side: the ray from the light through it, up to it.
-        let (dir, lit) = match light {
-            Some((y, _)) => {
-                let to = x_off - y;
-                let Some(d) = to.try_normalize() else {
-                    return;
-                };
-                let blocked = occluded(scene, &Ray::new(y, d), to.length(), None, None, counters);
-                (d, !blocked)
-            }
-            None => {
-                let blocked = occluded(
-                    scene,
-                    &Ray::new(x_off, -omega),
-                    f32::INFINITY,
-                    None,
-                    None,
-                    counters,
-                );
-                (omega, !blocked)
-            }
-        };
-        if !lit {
-            return;
-        }
-        // The receiver: the first surface beyond x_B.
-        let (d_idx, x_d, n_d) = match scene.intersect(&Ray::new(x_off, dir), f32::INFINITY) {
-            Intersection::Hit(h) => match h.surface {
-                Surface::Shape(d) => (d, h.p, h.n),
-                Surface::Emitter(_) => return,
-            },
-            Intersection::Miss => return,
-            Intersection::Exhausted => {
-                counters.exhausted += 1;
-                return;
-            }
-        };
-        let frame = scene.camera.frame::<f32>();
-        let mut walk = subpath_sampler(x_b, x_d);
-        let depth = scene.integrator.max_scatter();
-        let cams = &mut scratch.cams;
-        camera_side(
-            scene, &frame, d_idx, x_d, n_d, -dir, depth, &mut walk, cams, counters,
+        shadow_edge(
+            pass,
+            &point,
+            |p| Some(shape.eval(p)),
+            scratch,
+            counters,
+            sink,
         );
-        if cams.is_empty() {
+    }
+}
+
+/// A point `x_B` of a delta light's shadow-casting curve (a silhouette seen from the light, or a crease
+/// edge passed by the light's ray, [`super::delta_creases`]) and what eqs. (3)–(5) need of it.
+pub(crate) struct ShadowEdgePoint {
+    /// Index of the delta light among the scene's emitters.
+    pub light: usize,
+    /// The point.
+    pub x_b: glam::Vec3,
+    /// Unit direction across the light's ray at `x_B` towards the side where the ray clears the
+    /// occluder (`n_B` for a silhouette).
+    pub clear: glam::Vec3,
+    /// The rate of the occluder's residual `h` per unit of displacement of the ray towards `clear`
+    /// (`|∇φ|` for a silhouette).
+    pub steepness: f32,
+    /// The light's unit travel direction at `x_B`.
+    pub omega: glam::Vec3,
+    /// Unit tangent of the curve at `x_B`.
+    pub tangent: glam::Vec3,
+    /// `K` of eq. (4)'s weight: the number of equally likely choices made before drawing `x_B`.
+    pub choices: f32,
+    /// `p`: the density of `x_B` per unit length of the curve.
+    pub pdf: f32,
+}
+
+/// One sample of eq. (3) at `point`, the occluder's residual `residual(p)` with lifted parameters at
+/// the world point `p` (module docs, "The velocity by AD": 0 on the curve at the primal, growing
+/// towards the clear side at the rate [`ShadowEdgePoint::steepness`]): traces the ray past `x_B` from
+/// the light to the receiver and pushes the weighted contributions (not yet divided by the sample
+/// count).
+pub(crate) fn shadow_edge<S: Directions>(
+    pass: &Pass,
+    point: &ShadowEdgePoint,
+    residual: impl Fn(Vec3<S>) -> Option<S>,
+    scratch: &mut Scratch,
+    counters: &mut TraceCounters,
+    sink: &mut dyn SampleSink<S>,
+) {
+    let (scene, attach) = (pass.scene, &pass.attach);
+    let e = point.light;
+    let emitter = &scene.emitters[e].emitter;
+    let (x_b, omega) = (point.x_b, point.omega);
+    // The light's position (a point light) and the distance from it to x_B, eqs. (4), (5).
+    let light = match emitter {
+        Emitter::Point { position, .. } => {
+            let y = position.value();
+            Some((y, x_b.distance(y)))
+        }
+        _ => None,
+    };
+    let magnitude = light.map_or(0.0, |(y, _)| y.abs().max_element());
+    let eps = scene.trace.eps_at(x_b.abs().max_element().max(magnitude));
+    let x_off = x_b + point.clear * (OFFSET_TOLERANCES * eps);
+    // The light must reach x_B's clear side: the ray from the light through it, up to it.
+    let (dir, lit) = match light {
+        Some((y, _)) => {
+            let to = x_off - y;
+            let Some(d) = to.try_normalize() else {
+                return;
+            };
+            let blocked = occluded(scene, &Ray::new(y, d), to.length(), None, None, counters);
+            (d, !blocked)
+        }
+        None => {
+            let blocked = occluded(
+                scene,
+                &Ray::new(x_off, -omega),
+                f32::INFINITY,
+                None,
+                None,
+                counters,
+            );
+            (omega, !blocked)
+        }
+    };
+    if !lit {
+        return;
+    }
+    // The receiver: the first surface beyond x_B.
+    let (d_idx, x_d, n_d) = match scene.intersect(&Ray::new(x_off, dir), f32::INFINITY) {
+        Intersection::Hit(h) => match h.surface {
+            Surface::Shape(d) => (d, h.p, h.n),
+            Surface::Emitter(_) => return,
+        },
+        Intersection::Miss => return,
+        Intersection::Exhausted => {
+            counters.exhausted += 1;
             return;
         }
-        // Eqs. (4), (5): the measure change and the rate of h, per unit length of the curve.
-        let across = (cs.tangent - omega * omega.dot(cs.tangent)).length();
-        let (measure, rate, depth_b) = match light {
-            Some((_, dist)) => (across / dist, dist * grad_len, dist),
-            None => (across, grad_len, x_d.distance(x_off)),
-        };
-        let weight = measure * k as f32 / cs.pdf as f32;
-        if !(weight.is_finite() && rate > 0.0 && rate.is_finite()) {
-            return;
+    };
+    let frame = scene.camera.frame::<f32>();
+    let mut walk = subpath_sampler(x_b, x_d);
+    let depth = scene.integrator.max_scatter();
+    let cams = &mut scratch.cams;
+    camera_side(
+        scene, &frame, d_idx, x_d, n_d, -dir, depth, &mut walk, cams, counters,
+    );
+    if cams.is_empty() {
+        return;
+    }
+    // Eqs. (4), (5): the measure change and the rate of h, per unit length of the curve.
+    let across = (point.tangent - omega * omega.dot(point.tangent)).length();
+    let (measure, rate, depth_b) = match light {
+        Some((_, dist)) => (across / dist, dist * point.steepness, dist),
+        None => (across, point.steepness, x_d.distance(x_off)),
+    };
+    let weight = measure * point.choices / point.pdf;
+    if !(weight.is_finite() && rate > 0.0 && rate.is_finite()) {
+        return;
+    }
+    let y_s = match light {
+        Some((y, _)) => attach.emitter_vertex::<S>(e, y, -dir).x,
+        None => Vec3::zero(),
+    };
+    let xd_s = attach.shape_vertex::<S>(d_idx, x_d, n_d).x;
+    let Some(h) = residual(emitter.ray_point(y_s, xd_s, depth_b)) else {
+        return;
+    };
+    let v = -(h - h.detach()) / rate;
+    let power = emitter.mean_radiance();
+    for cam in cams.iter() {
+        // Δ = −W f I on the clear side (eq. (3)).
+        let scale = -(cam.f * power) * (weight * cam.j_film);
+        if scale == glam::Vec3::ZERO || !scale.is_finite() {
+            continue;
         }
-        let y_s = match light {
-            Some((y, _)) => attach.emitter_vertex::<S>(*e, y, -dir).x,
-            None => Vec3::zero(),
-        };
-        let xd_s = attach.shape_vertex::<S>(d_idx, x_d, n_d).x;
-        let h = shape.eval(emitter.ray_point(y_s, xd_s, depth_b));
-        let v = -(h - h.detach()) / rate;
-        let power = emitter.mean_radiance();
-        for cam in cams.iter() {
-            // Δ = −W f I on the clear side (eq. (3)).
-            let scale = -(cam.f * power) * (weight * cam.j_film);
-            if scale == glam::Vec3::ZERO || !scale.is_finite() {
-                continue;
-            }
-            let value = Vec3::<S>::constant(scale) * v;
-            if finite_splat(&value, S::zero()) {
-                splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), sink);
-            }
+        let value = Vec3::<S>::constant(scale) * v;
+        if finite_splat(&value, S::zero()) {
+            splat_on_film(scene, (cam.film.x, cam.film.y), value, S::zero(), sink);
         }
     }
 }

@@ -11,7 +11,8 @@
 //! boxes and cylinders: [`crease_edges`] (seen from the camera), [`crease_segment`] (the geometry of a
 //! segment passing an edge), [`crease_shadows`] (their secondary term) and [`crease_tears`] (the tear
 //! of a creased surface's parametrisation at later vertices). The hard shadow edges of point and
-//! directional lights: [`delta_shadows`] (silhouettes seen from the light). Each of those estimators is a
+//! directional lights: [`delta_shadows`] (silhouettes seen from the light) and [`delta_creases`] (crease
+//! edges seen from the light). Each of those estimators is a
 //! [`source::BoundarySource`], run by the one loop of [`source`]. Both integrators (`direct` is `path`
 //! with one scattering vertex).
 
@@ -19,6 +20,7 @@ pub mod crease_edges;
 pub mod crease_segment;
 pub mod crease_shadows;
 pub mod crease_tears;
+pub mod delta_creases;
 pub mod delta_shadows;
 pub mod emitter_edges;
 mod frustum;

@@ -99,8 +99,8 @@
 //! have no smooth silhouettes), the outlines of finite emitters seen directly
 //! ([`super::emitter_edges`]: rectangle edges, sphere silhouettes) and the crease edges of sharp boxes
 //! and cylinders and of hard CSG ([`super::crease_edges`]); the kinds in view share the samples equally
-//! ([`PrimarySources`]). Not included: the creases of hard CSG between unbounded children
-//! (listed by [`crate::scene::Scene::unsampled_creases`]), the film edges.
+//! ([`PrimarySources`]). Not included: the creases of hard CSG between unbounded children beyond
+//! the scene's crease region (listed by [`crate::scene::Scene::unsampled_creases`]), the film edges.
 
 use super::crease_edges::{CreaseEdges, CreasesInView};
 use super::emitter_edges::EmitterOutlines;

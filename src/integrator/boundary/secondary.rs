@@ -118,12 +118,13 @@
 //! boxes and cylinders and of hard CSG ([`super::crease_shadows`]: one segment estimate, [`super::shadow_segment`], for any
 //! occluder); [`SecondarySources`] shares the samples between them and the tear of creased surfaces at
 //! later vertices ([`super::crease_tears`]), and the hard shadow edges of delta lights, whose
-//! segments start at the light ([`super::delta_shadows`]). Not included: the primary boundary (silhouettes seen from the camera,
+//! segments start at the light ([`super::delta_shadows`]; crease edges: [`super::delta_creases`]). Not included: the primary boundary (silhouettes seen from the camera,
 //! [`super::primary`]), the discontinuity of one-sided emitters and BSDFs across their tangent planes,
-//! the creases of hard CSG between unbounded children.
+//! the creases of hard CSG between unbounded children beyond the scene's crease region.
 
 use super::crease_shadows::CreaseShadows;
 use super::crease_tears::CreaseTears;
+use super::delta_creases::DeltaCreases;
 use super::delta_shadows::DeltaShadows;
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::{Occluder, segment};
@@ -196,7 +197,7 @@ pub(crate) fn secondary_term(
 /// Everything the secondary term samples, prepared once per render: the tangent lines of smooth
 /// silhouettes (this module), lines past crease edges ([`super::crease_shadows`]), the tear of
 /// creased surfaces at vertices after the first ([`super::crease_tears`]) and the hard shadow edges
-/// of delta lights ([`super::delta_shadows`]), which share its samples equally (those the scene has no
+/// of delta lights ([`super::delta_shadows`], [`super::delta_creases`]), which share its samples equally (those the scene has no
 /// occluder or light for take no share).
 pub struct SecondarySources {
     /// Tangent lines of curved shapes.
@@ -207,6 +208,8 @@ pub struct SecondarySources {
     pub crease_tears: CreaseTears,
     /// The silhouettes seen from delta lights.
     pub delta_shadows: DeltaShadows,
+    /// The crease edges whose shadows delta lights cast.
+    pub delta_creases: DeltaCreases,
 }
 
 impl SecondarySources {
@@ -215,11 +218,13 @@ impl SecondarySources {
     pub fn of(scene: &Scene, tangent: TangentSampling) -> Self {
         let crease_shadows = CreaseShadows::of(scene);
         let crease_tears = CreaseTears::of(scene, crease_shadows.edges());
+        let delta_creases = DeltaCreases::of(scene, crease_shadows.edges());
         Self {
             silhouettes: SilhouetteShadows::of(scene, tangent),
             crease_shadows,
             crease_tears,
             delta_shadows: DeltaShadows::of(scene),
+            delta_creases,
         }
     }
 }
@@ -231,6 +236,7 @@ impl BoundaryTerm for SecondarySources {
             &self.crease_shadows,
             &self.crease_tears,
             &self.delta_shadows,
+            &self.delta_creases,
         ]
     }
 }

@@ -108,6 +108,9 @@ where
             let mut counters = TraceCounters::default();
             for x in 0..w {
                 let pixel = (y * w + x) as usize;
+                if !tile.needs_pixel(pixel) {
+                    continue;
+                }
                 let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 for s in 0..spp {
                     tile.begin_sample();

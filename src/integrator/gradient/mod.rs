@@ -209,7 +209,9 @@ fn gradient_with_image(
     let mut lap = |term: usize| {
         term_seconds[term] = clock.elapsed().as_secs_f64() - term_seconds.iter().sum::<f64>();
     };
-    let mut interior_film = film(1.0 / spp as f32);
+    // Samples that land only on pixels of zero adjoint add exactly nothing: not traced.
+    let mut interior_film =
+        film(1.0 / spp as f32).skipping_zero_adjoint(w, scene.camera.filter.radius());
     let s = interior::pass::<Rev, _>(scene, 0, options, &mut interior_film);
     lap(0);
     stats.absorb(s);

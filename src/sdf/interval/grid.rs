@@ -133,6 +133,10 @@ fn spline_enclosure<E: Enclosure>(
                 let c = at(x, y, z);
                 vmin = vmin.min(c);
                 vmax = vmax.max(c);
+                if !E::GRADIENT {
+                    // A plain interval's enclosure ignores the partials.
+                    continue;
+                }
                 let step = [(x + 1, y, z), (x, y + 1, z), (x, y, z + 1)];
                 for (a, &(i, j, k)) in step.iter().enumerate() {
                     if i < size[0] && j < size[1] && k < size[2] {
@@ -147,7 +151,11 @@ fn spline_enclosure<E: Enclosure>(
     // Ghost points and differences are exact in f64 up to a few ulps: grow by a relative hair.
     let value = Interval::new(vmin, vmax).inflate(1e-12, 0.0);
     let partials: [Interval; 3] = std::array::from_fn(|a| {
-        Interval::new(dmin[a], dmax[a]).inflate(1e-12, 0.0) * Interval::constant(inv_h[a])
+        if E::GRADIENT {
+            Interval::new(dmin[a], dmax[a]).inflate(1e-12, 0.0) * Interval::constant(inv_h[a])
+        } else {
+            Interval::ZERO
+        }
     });
     let hull = E::compose(value, partials, q);
     let pieces: isize = cells.iter().map(|c| c.1 - c.0 + 1).product();
@@ -157,18 +165,25 @@ fn spline_enclosure<E: Enclosure>(
     // Each cell the box touches: the Bernstein form of the cell's tricubic over the part of the box in the
     // cell, whose coefficients bound the value and, differenced, the partials (convergence O(w²) in the
     // box width w, where the control-point hull stays a few cells wide).
+    // The rows of each axis's cells (at most 3 per axis), computed once for all the cells they meet.
+    let axis_rows: [Vec<_>; 3] = std::array::from_fn(|a| {
+        (cells[a].0..=cells[a].1)
+            .map(|i| {
+                let t = (qs[a].value() - Interval::constant(bmin[a]))
+                    * Interval::constant(inv_h[a])
+                    - Interval::point(i as f64);
+                let t = t.intersect(Interval::new(0.0, 1.0));
+                bernstein_rows(t.lo, t.hi)
+            })
+            .collect()
+    });
     let mut out: Option<E> = None;
     for cz in cells[2].0..=cells[2].1 {
         for cy in cells[1].0..=cells[1].1 {
             for cx in cells[0].0..=cells[0].1 {
                 let cell = [cx, cy, cz];
-                let rows: [_; 3] = std::array::from_fn(|a| {
-                    let t = (qs[a].value() - Interval::constant(bmin[a]))
-                        * Interval::constant(inv_h[a])
-                        - Interval::point(cell[a] as f64);
-                    let t = t.intersect(Interval::new(0.0, 1.0));
-                    bernstein_rows(t.lo, t.hi)
-                });
+                let rows: [_; 3] =
+                    std::array::from_fn(|a| axis_rows[a][(cell[a] - cells[a].0) as usize]);
                 // The cell's 4 × 4 × 4 control values (taps i − 1 ..= i + 2, at block offset i − 1 − lo).
                 let o = [0, 1, 2].map(|a| (cell[a] - 1 - lo[a]) as usize);
                 let mut c = [0.0f64; 64];
@@ -188,15 +203,16 @@ fn spline_enclosure<E: Enclosure>(
                 // ≈ 2e-14 max|c|. The margin is 50 times that.
                 let margin = 1e-12 * cmax;
                 let (m, d) = (rows.map(|r| r.0), rows.map(|r| r.1));
-                let zy = apply(&apply(&c, [4, 4, 4], 2, &m[2]), [4, 4, 4], 1, &m[1]);
-                let v = range(&apply(&zy, [4, 4, 4], 0, &m[0]), [4, 4, 4], margin);
+                let z = apply::<2, 4>(&c, &m[2]);
+                let zy = apply::<1, 4>(&z, &m[1]);
+                let v = range(&apply::<0, 4>(&zy, &m[0]), [4, 4, 4], margin);
                 let partials: [Interval; 3] = if E::GRADIENT {
-                    let zx = apply(&apply(&c, [4, 4, 4], 2, &m[2]), [4, 4, 4], 0, &m[0]);
-                    let yx = apply(&apply(&c, [4, 4, 4], 1, &m[1]), [4, 4, 4], 0, &m[0]);
+                    let zx = apply::<0, 4>(&z, &m[0]);
+                    let yx = apply::<0, 4>(&apply::<1, 4>(&c, &m[1]), &m[0]);
                     let d = [
-                        range(&apply(&zy, [4, 4, 4], 0, &d[0]), [3, 4, 4], margin),
-                        range(&apply(&zx, [4, 4, 4], 1, &d[1]), [4, 3, 4], margin),
-                        range(&apply(&yx, [4, 4, 4], 2, &d[2]), [4, 4, 3], margin),
+                        range(&apply::<0, 3>(&zy, &d[0]), [3, 4, 4], margin),
+                        range(&apply::<1, 3>(&zx, &d[1]), [4, 3, 4], margin),
+                        range(&apply::<2, 3>(&yx, &d[2]), [4, 4, 3], margin),
                     ];
                     std::array::from_fn(|a| d[a] * Interval::constant(inv_h[a]))
                 } else {
@@ -213,21 +229,22 @@ fn spline_enclosure<E: Enclosure>(
     }
 }
 
-/// Apply the rows `m` (each over 4 inputs) along `axis` of the 4 × 4 × 4 array `c` (x fastest; `dims` its
-/// used extent): the result has `m.len()` entries along `axis`, same layout.
-fn apply(c: &[f64; 64], dims: [usize; 3], axis: usize, m: &[[f64; 4]]) -> [f64; 64] {
-    let stride = [1, 4, 16];
-    let mut out_dims = dims;
-    out_dims[axis] = m.len();
+/// Apply the `R` rows `m` (each over 4 inputs) along axis `AXIS` of the 4 × 4 × 4 array `c` (x
+/// fastest): the result has `R` entries along `AXIS` and 4 along the others, same layout. The axis and
+/// the extents are constants so that the loops unroll; each entry is the same sum, in the same order,
+/// as the generic loop's.
+#[inline(always)]
+fn apply<const AXIS: usize, const R: usize>(c: &[f64; 64], m: &[[f64; 4]; R]) -> [f64; 64] {
+    let s = [1, 4, 16][AXIS];
+    let extent = |a: usize| if a == AXIS { R } else { 4 };
     let mut out = [0.0; 64];
-    for z in 0..out_dims[2] {
-        for y in 0..out_dims[1] {
-            for x in 0..out_dims[0] {
+    for z in 0..extent(2) {
+        for y in 0..extent(1) {
+            for x in 0..extent(0) {
                 let mut idx = [x, y, z];
-                let row = &m[idx[axis]];
-                idx[axis] = 0;
+                let row = &m[idx[AXIS]];
+                idx[AXIS] = 0;
                 let b = idx[0] + 4 * idx[1] + 16 * idx[2];
-                let s = stride[axis];
                 out[x + 4 * y + 16 * z] = row[0] * c[b]
                     + row[1] * c[b + s]
                     + row[2] * c[b + 2 * s]

@@ -1,0 +1,134 @@
+//! One iteration of the race setup (`scenes/inverse/race/opt.json`: 6 of its 12 views, 128×128,
+//! 16 spp, the default boundary budgets), term by term, against a primal render of the same views at
+//! the same spp, in one run (medians of interleaved repetitions; the machine is shared, so ratios, never
+//! one absolute time).
+//!
+//! The optimised grid is the target's shape (the smooth union of `target.json`) baked over the
+//! grid's box at `N³` (`--grid N`, default 16; the race refines 16 → 31 → 61), so that the silhouette
+//! and the tracing cost are those of a shape near the end of each stage. Targets: the target scene at
+//! 64 spp.
+//!
+//! Prints per iteration (summed over the 6 views) the seconds of the primal renders, the loss passes,
+//! the interior, primary and secondary terms, and each as a ratio to the primal.
+//!
+//! `cargo bench --bench race_iteration [-- --grid 61] [-- REPS]`.
+
+use implicit_psdr::integrator::{DiffOptions, RenderOptions, loss_gradient, render};
+use implicit_psdr::optimize::Optimization;
+use implicit_psdr::optimize::config::{OptimizeConfig, Target};
+use implicit_psdr::sdf::bake;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+/// Views per iteration, as in the race.
+const VIEWS: usize = 6;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let grid: usize = (args.iter().position(|a| a == "--grid"))
+        .and_then(|i| args.get(i + 1)?.parse().ok())
+        .unwrap_or(16);
+    let reps: usize = (args.iter().enumerate())
+        .filter(|(i, _)| *i == 0 || args[i - 1] != "--grid")
+        .find_map(|(_, a)| a.parse().ok())
+        .unwrap_or(3);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cfg = OptimizeConfig::load(&root.join("scenes/inverse/race/opt.json"))
+        .expect("the race's opt.json loads");
+    let Target::Scene { scene: target, .. } = &cfg.target else {
+        panic!("the race's target is a scene");
+    };
+    let node = cfg.settings.grids[0].clone();
+    let mut scene = cfg.scene.clone();
+    let [lo, hi] = scene.grid_box(&node).unwrap();
+    let baked = bake(&target.shapes[0].sdf, lo, hi, grid);
+    scene.set_grid(&node, baked).unwrap();
+    let scene = scene.with_parameter(&format!("{node}.level"), 0.0).unwrap();
+    let spp = cfg.settings.spp;
+    let targets: Vec<_> = (cfg.views.iter().enumerate())
+        .map(|(k, v)| {
+            let options = RenderOptions {
+                spp: 64,
+                seed: 1000 + k as u64,
+                ..RenderOptions::default()
+            };
+            render(&v.apply(target).unwrap(), &options).0
+        })
+        .collect();
+    let mut settings = cfg.settings.clone();
+    settings.upsample_at.clear();
+    let opt = Optimization::new(scene, cfg.views.clone(), targets, settings).unwrap();
+    let views = opt.views_of(0);
+    assert_eq!(views.len(), VIEWS);
+    let layout = implicit_psdr::integrator::GradientLayout::select(
+        &opt.scene,
+        &opt.settings.params,
+        &opt.settings.grids,
+    )
+    .unwrap();
+    println!(
+        "race iteration: {VIEWS} views {}x{}, {spp} spp, grid {:?} ({} values), {reps} repetitions",
+        opt.scene.camera.width,
+        opt.scene.camera.height,
+        opt.scene.grid_values(&node).unwrap().dims,
+        layout.entries
+    );
+    // Per repetition: primal, loss pass, interior, primary, secondary, whole gradient call.
+    let mut rows: Vec<[f64; 6]> = Vec::new();
+    for rep in 0..reps {
+        let mut row = [0.0; 6];
+        for &v in &views {
+            let scene = opt.views[v].apply(&opt.scene).unwrap();
+            let options = DiffOptions {
+                render: RenderOptions {
+                    spp,
+                    seed: (rep * 100 + 2 * v) as u64,
+                    ..RenderOptions::default()
+                },
+                ..DiffOptions::default()
+            };
+            let t = Instant::now();
+            black_box(render(&scene, &options.render));
+            row[0] += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let g = loss_gradient(
+                &scene,
+                &layout,
+                &opt.targets[v],
+                opt.settings.loss,
+                &options,
+            )
+            .unwrap();
+            row[5] += t.elapsed().as_secs_f64();
+            row[1] += g.loss_seconds;
+            for k in 0..3 {
+                row[2 + k] += g.gradient.term_seconds[k];
+            }
+            black_box(g);
+        }
+        rows.push(row);
+    }
+    let names = [
+        "primal (6 renders)",
+        "loss pass",
+        "interior term",
+        "primary term",
+        "secondary term",
+        "loss + gradient",
+    ];
+    println!(
+        "{:<20} {:>10} {:>10}",
+        "per iteration", "median s", "/ primal"
+    );
+    for (k, name) in names.iter().enumerate() {
+        let seconds = median(rows.iter().map(|r| r[k]).collect());
+        let ratio = median(rows.iter().map(|r| r[k] / r[0]).collect());
+        println!("{name:<20} {seconds:>10.3} {ratio:>10.2}");
+    }
+}
