@@ -36,7 +36,7 @@ pub const DEFAULT_EMA: f32 = 0.0;
 /// The per-entry gradient clamp (in running RMS of the entry) when `gradient_clamp` is absent.
 pub const DEFAULT_GRADIENT_CLAMP: Option<f64> = None;
 /// Levels of the loss's image pyramid when `loss_scales` is absent.
-pub const DEFAULT_LOSS_SCALES: u32 = 4;
+pub const DEFAULT_LOSS_SCALES: u32 = 1;
 /// Redistancing period of the optimised grids when `redistance_every` is absent.
 pub const DEFAULT_REDISTANCE_EVERY: Option<u32> = Some(1);
 /// Samples per pixel of targets rendered from a scene when `target_spp` is absent.
@@ -218,7 +218,9 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             ));
         }
     };
-    let loss_scales = o.opt_int("loss_scales", 1, 16)?.unwrap_or(DEFAULT_LOSS_SCALES);
+    let loss_scales = o
+        .opt_int("loss_scales", 1, 16)?
+        .unwrap_or(DEFAULT_LOSS_SCALES);
     let views_per_iteration = match o.opt_int("views_per_iteration", 1, u32::MAX as u64)? {
         Some(k) if k as usize > views.len() => {
             return Err(Error::field(
@@ -240,7 +242,9 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
     let upsample_at = upsample_at(&o, iterations)?;
     let redistance_every = match o.get("redistance_every") {
         None => DEFAULT_REDISTANCE_EVERY,
-        Some(_) => o.opt_int("redistance_every", 0, u32::MAX as u64)?.filter(|&k| k > 0),
+        Some(_) => o
+            .opt_int("redistance_every", 0, u32::MAX as u64)?
+            .filter(|&k| k > 0),
     };
     let laplacian = match o.opt_f32("laplacian")? {
         None => 0.0,
@@ -256,7 +260,10 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
         let set = [
             ("upsample_at", !upsample_at.is_empty()),
             ("redistance_every", o.get("redistance_every").is_some()),
-            ("learning_rate_resolution", o.get("learning_rate_resolution").is_some()),
+            (
+                "learning_rate_resolution",
+                o.get("learning_rate_resolution").is_some(),
+            ),
             ("laplacian", laplacian != 0.0),
         ];
         if let Some((key, _)) = set.iter().find(|(_, s)| *s) {
@@ -394,8 +401,7 @@ fn learning_rates(o: &Obj) -> Result<(f32, f32)> {
         Some(v @ Value::Object(_)) => {
             let r = Obj::new(v, field, &["grids", "params"])?;
             let rate = |key: &str, default: f32| {
-                r.get(key)
-                    .map_or(Ok(default), |v| positive(v, &r.at(key)))
+                r.get(key).map_or(Ok(default), |v| positive(v, &r.at(key)))
             };
             Ok((
                 rate("grids", DEFAULT_LEARNING_RATE_GRIDS)?,
@@ -464,7 +470,10 @@ fn adam_options(o: &Obj) -> Result<AdamOptions> {
             None => {}
             Some(b) if (0.0..1.0).contains(&b) => *slot = b as f64,
             Some(b) => {
-                return Err(Error::field(a.at(key), format!("must be in [0, 1), got {b}")));
+                return Err(Error::field(
+                    a.at(key),
+                    format!("must be in [0, 1), got {b}"),
+                ));
             }
         }
     }

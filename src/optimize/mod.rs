@@ -21,9 +21,9 @@ pub mod targets;
 mod views;
 
 pub use adam::{Adam, AdamOptions};
-pub use schedule::{Decay, Ema};
 pub use progress::Row;
 pub use run::{Observer, Outcome, Status, run};
+pub use schedule::{Decay, Ema};
 pub use views::{View, orbit};
 
 use crate::error::{Error, Result};
@@ -264,13 +264,7 @@ impl Optimization {
         for &v in &views {
             let scene = self.views[v].apply(&self.scene)?;
             let options = self.options(index, v);
-            let g = loss_gradient(
-                &scene,
-                &self.layout,
-                &self.targets[v],
-                image_loss,
-                &options,
-            )?;
+            let g = loss_gradient(&scene, &self.layout, &self.targets[v], image_loss, &options)?;
             loss += g.loss;
             invalid += g.gradient.stats.invalid_derivatives;
             stages.loss_pass += g.loss_seconds;

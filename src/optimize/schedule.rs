@@ -154,17 +154,28 @@ mod tests {
         assert!((ema.weight() - 2.0 / 11.0).abs() < 1e-12);
         ema.push(&[13.0, 7.0]);
         let v = ema.value().unwrap();
-        assert!((v[0] - 11.0).abs() < 1e-5 && (v[1] - 5.0).abs() < 1e-5, "{v:?}");
+        assert!(
+            (v[0] - 11.0).abs() < 1e-5 && (v[1] - 5.0).abs() < 1e-5,
+            "{v:?}"
+        );
         // t = 2: weight 3/12; t = 8: min(0.5, 9/18) = 0.5; t = 20: 0.5 (β caps it).
         assert!((ema.weight() - 0.25).abs() < 1e-12);
         ema.push(&[3.0, 1.0]);
         let v = ema.value().unwrap();
-        assert!((v[0] - 5.0).abs() < 1e-5 && (v[1] - 2.0).abs() < 1e-5, "{v:?}");
+        assert!(
+            (v[0] - 5.0).abs() < 1e-5 && (v[1] - 2.0).abs() < 1e-5,
+            "{v:?}"
+        );
         // A linear map of the average is the average of the mapped values.
         ema.remap(|v| vec![v[0], v[0] + v[1], 2.0 * v[1]]);
         ema.push(&[1.0, 3.0, 0.0]);
         let mut direct = Ema::new(3, 0.5);
-        for x in [[2.0f32, -2.0, -8.0], [13.0, 20.0, 14.0], [3.0, 4.0, 2.0], [1.0, 3.0, 0.0]] {
+        for x in [
+            [2.0f32, -2.0, -8.0],
+            [13.0, 20.0, 14.0],
+            [3.0, 4.0, 2.0],
+            [1.0, 3.0, 0.0],
+        ] {
             direct.push(&x);
         }
         let (a, b) = (ema.value().unwrap(), direct.value().unwrap());

@@ -160,7 +160,9 @@ mod tests {
     fn image(width: u32, height: u32, salt: u32) -> Image {
         let mut out = Image::new(width, height);
         for (k, v) in out.rgb.iter_mut().enumerate() {
-            let h = (k as u32).wrapping_mul(2_654_435_761).wrapping_add(salt * 97);
+            let h = (k as u32)
+                .wrapping_mul(2_654_435_761)
+                .wrapping_add(salt * 97);
             *v = (h % 1000) as f32 / 1000.0;
         }
         out
