@@ -22,7 +22,7 @@ pub const DEFAULT_SPP: u32 = 16;
 pub const DEFAULT_LEARNING_RATE: f32 = 0.01;
 /// Adam's step size for grid values (scene units, at the starting resolution and iteration 0) when
 /// `learning_rate` is absent.
-pub const DEFAULT_LEARNING_RATE_GRIDS: f32 = 0.02;
+pub const DEFAULT_LEARNING_RATE_GRIDS: f32 = 0.04;
 /// The learning rate's decay when `learning_rate_decay` is absent.
 pub const DEFAULT_DECAY: Decay = Decay::Cosine {
     final_fraction: DEFAULT_LEARNING_RATE_FINAL,
