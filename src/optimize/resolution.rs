@@ -170,6 +170,9 @@ pub fn auto_divisors(
         let dims = scene.grid_values(&block.node)?.dims;
         cells.push(((lo + hi) * 0.5, hi - lo, dims));
     }
+    if cells.is_empty() {
+        return Ok(vec![1; stages]);
+    }
     let mut out = Vec::with_capacity(stages);
     for stage in 0..stages {
         let mut pixels = f32::INFINITY;
@@ -252,6 +255,84 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// `image_scale` as `parse` reads it, for a `size` film with `stages` stages and grids.
+    fn parsed(v: serde_json::Value, stages: usize, size: (u32, u32)) -> Result<ImageScale> {
+        let root = serde_json::json!({ "image_scale": v });
+        let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
+        parse(&o, stages, true, size)
+    }
+
+    #[test]
+    fn image_scale_parses_lists_and_auto_and_names_the_field_of_bad_values() {
+        use serde_json::json;
+        let root = json!({});
+        let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
+        assert_eq!(parse(&o, 3, true, (128, 128)).unwrap(), ImageScale::Full);
+        assert_eq!(
+            parsed(json!([0.5, 1, 0.25]), 3, (128, 64)).unwrap(),
+            ImageScale::Stages(vec![2, 1, 4])
+        );
+        assert_eq!(
+            parsed(json!("auto"), 2, (128, 128)).unwrap(),
+            ImageScale::Auto
+        );
+        let root = json!({"image_scale": "auto"});
+        let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
+        let no_grids = parse(&o, 1, false, (128, 128)).unwrap_err().to_string();
+        assert!(
+            no_grids.starts_with("image_scale: \"auto\" follows"),
+            "{no_grids}"
+        );
+        for (v, stages, size, expected) in [
+            (
+                json!([1, 0.5]),
+                3,
+                (128, 128),
+                "image_scale: needs one scale per grid stage (3",
+            ),
+            (
+                json!([1, 0.3]),
+                2,
+                (128, 128),
+                "image_scale[1]: expected 1, 0.5 or 0.25, got",
+            ),
+            (
+                json!([0.125]),
+                1,
+                (128, 128),
+                "image_scale[0]: expected 1, 0.5 or 0.25",
+            ),
+            (
+                json!(["half"]),
+                1,
+                (128, 128),
+                "image_scale[0]: expected 1, 0.5 or 0.25",
+            ),
+            (
+                json!([0.25]),
+                1,
+                (128, 90),
+                "image_scale[0]: 1/4 of the 128x90 film",
+            ),
+            (
+                json!(0.5),
+                1,
+                (128, 128),
+                "image_scale: expected a list of scales",
+            ),
+            (
+                json!("half"),
+                1,
+                (128, 128),
+                "image_scale: expected a list of scales",
+            ),
+        ] {
+            let e = parsed(v, stages, size).unwrap_err().to_string();
+            assert!(e.starts_with(expected), "{e}");
+            assert!(!e.contains('\n'), "{e}");
         }
     }
 
