@@ -460,7 +460,7 @@ fn adam_options(o: &Obj) -> Result<AdamOptions> {
     };
     match o.opt_f32("gradient_clamp")? {
         None => {}
-        Some(k) if k == 0.0 => options.clamp = None,
+        Some(0.0) => options.clamp = None,
         Some(k) if k > 0.0 => options.clamp = Some(k as f64),
         Some(k) => {
             return Err(Error::field(

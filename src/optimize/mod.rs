@@ -325,7 +325,9 @@ impl Optimization {
         self.apply(&mut values, &proposed)?;
         if self.ema.is_some() {
             let values = self.values()?;
-            self.ema.as_mut().expect("checked").push(&values);
+            if let Some(ema) = &mut self.ema {
+                ema.push(&values);
+            }
         }
         self.done += 1;
         Ok(Iteration {

@@ -90,7 +90,7 @@ pub(crate) fn parse(
                         format!("expected 1, 0.5 or 0.25, got {}", describe(v)),
                     ));
                 };
-                if size.0 % d != 0 || size.1 % d != 0 {
+                if !size.0.is_multiple_of(d) || !size.1.is_multiple_of(d) {
                     return Err(Error::field(
                         at,
                         format!(
@@ -135,7 +135,7 @@ pub fn divisors(
             }
             if let Some(&bad) = d
                 .iter()
-                .find(|&&d| !DIVISORS.contains(&d) || w % d != 0 || h % d != 0)
+                .find(|&&d| !DIVISORS.contains(&d) || !w.is_multiple_of(d) || !h.is_multiple_of(d))
             {
                 return Err(Error::field(
                     "image_scale",
@@ -195,7 +195,11 @@ pub fn auto_divisors(
         let d = DIVISORS
             .into_iter()
             .rev()
-            .find(|&d| w % d == 0 && h % d == 0 && pixels / d as f32 >= AUTO_MIN_CELL_PIXELS)
+            .find(|&d| {
+                w.is_multiple_of(d)
+                    && h.is_multiple_of(d)
+                    && pixels / d as f32 >= AUTO_MIN_CELL_PIXELS
+            })
             .unwrap_or(1);
         out.push(d);
     }
@@ -211,7 +215,7 @@ pub fn stage_of(index: u32, upsample_at: &[u32]) -> usize {
 /// pixels (repeated 2 × 2 box averages). The image's sides must be multiples of `divisor`.
 pub fn reduce(image: &Image, divisor: u32) -> Image {
     debug_assert!(DIVISORS.contains(&divisor));
-    debug_assert!(image.width % divisor == 0 && image.height % divisor == 0);
+    debug_assert!(image.width.is_multiple_of(divisor) && image.height.is_multiple_of(divisor));
     let mut out = image.clone();
     let mut d = divisor;
     while d > 1 {
