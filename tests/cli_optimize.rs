@@ -571,6 +571,26 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
             "opt.json: target.images[1]: file v9.exr not found",
         ),
         (
+            "image scale not a list",
+            |o| o["image_scale"] = json!(0.5),
+            "opt.json: image_scale: expected a list of scales",
+        ),
+        (
+            "image scale of another stage count",
+            |o| o["image_scale"] = json!([0.5, 1]),
+            "opt.json: image_scale: needs one scale per grid stage (1",
+        ),
+        (
+            "image scale not a power of two",
+            |o| o["image_scale"] = json!([0.3]),
+            "opt.json: image_scale[0]: expected 1, 0.5 or 0.25",
+        ),
+        (
+            "automatic image scale without grids",
+            |o| o["image_scale"] = json!("auto"),
+            "opt.json: image_scale: \"auto\" follows the grids' cells",
+        ),
+        (
             "upsample beyond the run",
             |o| {
                 o["optimize"] = json!({"params": ["ball.radius"]});

@@ -62,6 +62,7 @@ const FIELDS: &[&str] = &[
     "gradient_clamp",
     "ema",
     "loss_scales",
+    "image_scale",
     "views_per_iteration",
     "seed",
     "target_spp",
@@ -256,6 +257,12 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             ));
         }
     };
+    let image_scale = super::resolution::parse(
+        &o,
+        upsample_at.len() + 1,
+        !grids.is_empty(),
+        (scene.camera.width, scene.camera.height),
+    )?;
     if grids.is_empty() {
         let set = [
             ("upsample_at", !upsample_at.is_empty()),
@@ -312,6 +319,7 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             adam,
             ema,
             loss_scales,
+            image_scale,
             views_per_iteration,
             seed,
             terms,

@@ -15,6 +15,7 @@ pub mod config;
 pub mod metrics;
 pub mod pictures;
 pub mod progress;
+pub mod resolution;
 pub mod run;
 pub mod schedule;
 pub mod targets;
@@ -22,6 +23,7 @@ mod views;
 
 pub use adam::{Adam, AdamOptions};
 pub use progress::Row;
+pub use resolution::ImageScale;
 pub use run::{Observer, Outcome, Status, run};
 pub use schedule::{Decay, Ema};
 pub use views::{View, orbit};
@@ -77,6 +79,8 @@ pub struct Settings {
     pub ema: f32,
     /// Levels of the image pyramid of the loss ([`Loss::multiscale`]); 1: the plain loss.
     pub loss_scales: u32,
+    /// The views' image resolution in each grid stage ([`resolution`]); full by default.
+    pub image_scale: ImageScale,
     /// Views per iteration, drawn without replacement from the seed (`None`: all).
     pub views_per_iteration: Option<usize>,
     /// Seed of the view choice and of every render.
@@ -143,6 +147,10 @@ pub struct Optimization {
     ema: Option<Ema>,
     /// The optimised grids' dimensions at the start (for [`Settings::learning_rate_resolution`]).
     start_dims: Vec<(String, [usize; 3])>,
+    /// The divisor of the film's width and height in each grid stage ([`Settings::image_scale`]).
+    pub stage_divisors: Vec<u32>,
+    /// The targets reduced by each divisor > 1 that a stage uses.
+    reduced_targets: Vec<(u32, Vec<Image>)>,
     /// Iterations done.
     pub done: u32,
 }
@@ -194,6 +202,20 @@ impl Optimization {
                 start_dims.push((block.node.clone(), scene.grid_values(&block.node)?.dims));
             }
         }
+        let stage_divisors = resolution::divisors(
+            &settings.image_scale,
+            &scene,
+            &views,
+            &settings.grids,
+            settings.upsample_at.len() + 1,
+        )?;
+        let mut reduced_targets: Vec<(u32, Vec<Image>)> = Vec::new();
+        for &d in &stage_divisors {
+            if d > 1 && !reduced_targets.iter().any(|(e, _)| *e == d) {
+                let images = targets.iter().map(|t| resolution::reduce(t, d)).collect();
+                reduced_targets.push((d, images));
+            }
+        }
         Ok(Self {
             scene,
             views,
@@ -203,6 +225,8 @@ impl Optimization {
             adam,
             ema,
             start_dims,
+            stage_divisors,
+            reduced_targets,
             done: 0,
         })
     }
@@ -261,10 +285,15 @@ impl Optimization {
         let mut loss = 0.0;
         let mut invalid = 0;
         let image_loss = self.settings.loss.multiscale(self.settings.loss_scales);
+        let divisor = self.divisor_at(index);
+        let targets = match self.reduced_targets.iter().find(|(d, _)| *d == divisor) {
+            Some((_, reduced)) => reduced,
+            None => &self.targets,
+        };
         for &v in &views {
-            let scene = self.views[v].apply(&self.scene)?;
+            let scene = self.views[v].apply_reduced(&self.scene, divisor)?;
             let options = self.options(index, v);
-            let g = loss_gradient(&scene, &self.layout, &self.targets[v], image_loss, &options)?;
+            let g = loss_gradient(&scene, &self.layout, &targets[v], image_loss, &options)?;
             loss += g.loss;
             invalid += g.gradient.stats.invalid_derivatives;
             stages.loss_pass += g.loss_seconds;
@@ -309,6 +338,12 @@ impl Optimization {
             invalid_samples: invalid,
             stage_seconds: stages,
         })
+    }
+
+    /// The divisor of the film's width and height at iteration `index` (its grid stage's).
+    pub fn divisor_at(&self, index: u32) -> u32 {
+        let stage = resolution::stage_of(index, &self.settings.upsample_at);
+        self.stage_divisors.get(stage).copied().unwrap_or(1)
     }
 
     /// The step size of every entry at iteration `index`: the named parameters' and the grids' rates
