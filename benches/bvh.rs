@@ -123,9 +123,11 @@ fn main() {
     let samples = (16 * 256 * 256) as f64;
     let rate = |scene: &Scene, options: &RenderOptions, reps: usize| {
         let spp = options.spp as f64;
-        samples / 16.0 * spp / time(reps, || {
-            black_box(render(scene, options));
-        }) / 1e6
+        samples / 16.0 * spp
+            / time(reps, || {
+                black_box(render(scene, options));
+            })
+            / 1e6
     };
     let r_one = rate(&scene(1), &options, reps);
     let r_shapes = rate(&scene(1000), &options, reps);
@@ -137,7 +139,16 @@ fn main() {
     let r_plain = rate(&union_scene(1000, false), &one_spp, 1);
     println!("1000 balls as one union shape (M samples/s, and / 1 ball):");
     println!("  1 ball               {r_one:8.3}   1.00");
-    println!("  1000 shapes          {r_shapes:8.3}   {:.2}", r_shapes / r_one);
-    println!("  union, culled        {r_union:8.3}   {:.2}", r_union / r_one);
-    println!("  union, every child   {r_plain:8.3}   {:.4}   (1 spp, one render)", r_plain / r_one);
+    println!(
+        "  1000 shapes          {r_shapes:8.3}   {:.2}",
+        r_shapes / r_one
+    );
+    println!(
+        "  union, culled        {r_union:8.3}   {:.2}",
+        r_union / r_one
+    );
+    println!(
+        "  union, every child   {r_plain:8.3}   {:.4}   (1 spp, one render)",
+        r_plain / r_one
+    );
 }

@@ -8,7 +8,9 @@ mod common;
 
 use glam::Vec3;
 use implicit_psdr::bsdf::Bsdf;
-use implicit_psdr::integrator::{DiffOptions, IntegratorKind, RenderOptions, render, render_derivatives};
+use implicit_psdr::integrator::{
+    DiffOptions, IntegratorKind, RenderOptions, render, render_derivatives,
+};
 use implicit_psdr::scene::{Scene, Shape};
 use implicit_psdr::sdf::{GridData, Sdf};
 
@@ -135,8 +137,15 @@ fn same_everywhere(sdf: &Sdf, pts: &[Vec3]) -> usize {
         assert_eq!(a.to_bits(), b.to_bits(), "value at {p}: {a} vs {b}");
         inside += usize::from(a < 0.0);
         let (ga, gb) = (sdf.gradient(p), plain.gradient(p));
-        assert_eq!(ga.to_array().map(f32::to_bits), gb.to_array().map(f32::to_bits), "gradient at {p}");
-        let (fa, fb) = (sdf.eval_faces::<f32>(p.into()), plain.eval_faces::<f32>(p.into()));
+        assert_eq!(
+            ga.to_array().map(f32::to_bits),
+            gb.to_array().map(f32::to_bits),
+            "gradient at {p}"
+        );
+        let (fa, fb) = (
+            sdf.eval_faces::<f32>(p.into()),
+            plain.eval_faces::<f32>(p.into()),
+        );
         assert_eq!(fa.to_bits(), fb.to_bits(), "face field at {p}");
         let (ha, hb) = (sdf.hessian(p), plain.hessian(p));
         assert_eq!(
@@ -192,7 +201,13 @@ fn nested_csg_and_unculled_kinds_give_the_plain_values() {
         Sdf::cuboid([0.6, 0.4, 0.5], [0.5, 0.5, 0.5], 0.0),
     ]));
     kids.push(Sdf::intersection(leaves(&mut rng, 10, 0.3)));
-    kids.push(Sdf::transform(group(&mut rng), [1.0, 0.0, 0.0], Vec3::Y, 30.0, 0.7));
+    kids.push(Sdf::transform(
+        group(&mut rng),
+        [1.0, 0.0, 0.0],
+        Vec3::Y,
+        30.0,
+        0.7,
+    ));
     kids.push(Sdf::difference(leaves(&mut rng, 11, half)));
     kids.push(Sdf::named("n", group(&mut rng)));
     kids.push(Sdf::plane(Vec3::Y, -3.0));
@@ -242,7 +257,12 @@ fn parameters_set_in_place_and_refreshed_keep_the_values_right() {
 fn ball_union(n: usize) -> Scene {
     let mut rng = Rng(9);
     let kids: Vec<Sdf> = (0..n)
-        .map(|i| Sdf::named(format!("b{i}"), Sdf::sphere(rng.point(1.5).to_array(), 0.12)))
+        .map(|i| {
+            Sdf::named(
+                format!("b{i}"),
+                Sdf::sphere(rng.point(1.5).to_array(), 0.12),
+            )
+        })
         .collect();
     let diffuse = || Bsdf::Diffuse {
         albedo: [0.6, 0.6, 0.6].into(),
@@ -287,7 +307,7 @@ fn a_union_of_200_balls_renders_the_same_image_and_derivative_culled() {
     assert_eq!(a.rgb, b.rgb, "images differ");
     assert!(a.rgb.iter().any(|&v| v > 0.0));
     // Selecting parameters refreshes the scene: the hierarchy is rebuilt, the derivatives the same.
-    let names = ["balls.b0.radius", "balls.b7.center.x"];
+    let names = ["b0.radius", "b7.center.x"];
     let selection = with.select(&names).unwrap();
     let diff = DiffOptions {
         render: options.clone(),

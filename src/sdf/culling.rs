@@ -228,7 +228,12 @@ impl ChildBvh {
     /// child, then for the children whose culling box's bound passes `keep(bound)` (asked again with
     /// the latest state before each evaluation, so that it tightens as values come in).
     #[inline]
-    fn visit(&self, p: glam::Vec3, mut keep: impl FnMut(f32) -> bool, mut visit: impl FnMut(usize)) {
+    fn visit(
+        &self,
+        p: glam::Vec3,
+        mut keep: impl FnMut(f32) -> bool,
+        mut visit: impl FnMut(usize),
+    ) {
         for &i in &self.always {
             visit(i as usize);
         }
@@ -441,7 +446,12 @@ impl Sdf {
                 bbox_max,
                 level,
                 ..
-            } => Some(super::grid::cull_bounds(data, *bbox_min, *bbox_max, level.value)),
+            } => Some(super::grid::cull_bounds(
+                data,
+                *bbox_min,
+                *bbox_max,
+                level.value,
+            )),
             Sdf::Named { child, .. } => child.cull_bounds(),
         }
     }
