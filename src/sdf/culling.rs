@@ -106,6 +106,23 @@ impl std::ops::DerefMut for Children {
     }
 }
 
+impl<'a> IntoIterator for &'a Children {
+    type Item = &'a Sdf;
+    type IntoIter = std::slice::Iter<'a, Sdf>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.list.iter()
+    }
+}
+
+impl<'a> IntoIterator for &'a mut Children {
+    type Item = &'a mut Sdf;
+    type IntoIter = std::slice::IterMut<'a, Sdf>;
+    /// Through the mutable access: drops the hierarchy.
+    fn into_iter(self) -> Self::IntoIter {
+        std::ops::DerefMut::deref_mut(self).iter_mut()
+    }
+}
+
 impl PartialEq for Children {
     fn eq(&self, other: &Self) -> bool {
         self.list == other.list
