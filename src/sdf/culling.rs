@@ -23,6 +23,9 @@
 //! grown by a margin (1e-4 of their size and position, and the distance shrunk by 1e-5 relatively) so
 //! that rounding in a child's evaluation cannot cross the bound.
 //!
+//! The field of the faces ([`Sdf::eval_faces`]) is never culled: a sharp primitive's face field is
+//! below its distance outside its edges, so its box bounds nothing there.
+//!
 //! Intersections and smooth unions are evaluated in full: a box bounds a field from below, never from
 //! above (a max needs the latter), and the folded smooth minimum depends on the order of its children in
 //! its last bits, so skipping one exactly needs more than the box test (see docs/performance.md).

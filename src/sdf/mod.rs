@@ -315,12 +315,13 @@ impl Sdf {
             } => primitives::cylinder::<S, FACES>(p, center, *axis, radius, half_height, rounding),
             Sdf::Primitive(primitive) => primitive.eval(p),
             Sdf::Plane { normal, offset } => primitives::plane(p, *normal, offset),
-            Sdf::Union(children) => match culling::hierarchy::<S>(children) {
+            Sdf::Union(children) => match culling::hierarchy::<S>(children).filter(|_| !FACES) {
                 Some(bvh) => culling::union::<S, FACES>(children, bvh, p),
                 None => csg::union::<S, FACES>(children, p),
             },
             Sdf::Intersection(children) => csg::intersection::<S, FACES>(children, p),
-            Sdf::Difference(children) => match culling::hierarchy::<S>(children) {
+            Sdf::Difference(children) => match culling::hierarchy::<S>(children).filter(|_| !FACES)
+            {
                 Some(bvh) => culling::difference::<S, FACES>(children, bvh, p),
                 None => csg::difference::<S, FACES>(children, p),
             },
