@@ -2,7 +2,9 @@
 //! light's position converge to the values that rendered the target.
 
 use implicit_psdr::integrator::Loss;
-use implicit_psdr::optimize::{Optimization, Settings, Terms, View, render_targets};
+use implicit_psdr::optimize::{
+    AdamOptions, Decay, Optimization, Settings, Terms, View, render_targets,
+};
 use implicit_psdr::scene::{Scene, parse};
 
 /// A ball on a floor under a rectangle light and a dim sky, 32×32. The ball sits at `x = 0.5` rather
@@ -48,6 +50,11 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
         loss: Loss::L2,
         learning_rate_grids: 0.0,
         learning_rate_params: 0.02,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
         views_per_iteration: None,
         seed: 1,
         terms: Terms::Complete,
@@ -148,6 +155,11 @@ fn grid_run(terms: Terms, seed: u64) -> (f64, f64, f64, f64) {
         loss: Loss::L2,
         learning_rate_grids: 0.02,
         learning_rate_params: 0.0,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
         views_per_iteration: None,
         seed,
         terms,
