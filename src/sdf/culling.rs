@@ -332,7 +332,7 @@ pub(super) fn union<S: Scalar, const FACES: bool>(
     let best_cell = std::cell::Cell::new(best.primal());
     bvh.visit(
         q,
-        |bound| !(bound > best_cell.get()),
+        |bound| bound.partial_cmp(&best_cell.get()) != Some(std::cmp::Ordering::Greater),
         |i| {
             let v = children[i].eval_as::<S, FACES>(p);
             let (vp, bp) = (v.primal(), best.primal());
@@ -363,7 +363,7 @@ pub(super) fn difference<S: Scalar, const FACES: bool>(
     let best_cell = std::cell::Cell::new(best.primal());
     bvh.visit(
         q,
-        |bound| !(-bound < best_cell.get()),
+        |bound| (-bound).partial_cmp(&best_cell.get()) != Some(std::cmp::Ordering::Less),
         |i| {
             let v = -children[i].eval_as::<S, FACES>(p);
             let (vp, bp) = (v.primal(), best.primal());
