@@ -312,3 +312,29 @@ fn inverse_examples_load() {
     }
     assert!(count >= 3, "{count} examples");
 }
+
+/// Left out of `OPT.json`, `image_scale` is `"auto"` when only SDF grids (and named parameters) are
+/// optimised, and full resolution when a texture or an environment map is (their texels are seen
+/// at the film's resolution): on the race, whose 16³ cells project to about 6 pixels, the first
+/// stage renders at half size; the examples that optimise texels stay at full size.
+#[test]
+fn image_scale_defaults_to_auto_only_for_sdf_grids() {
+    use implicit_psdr::optimize::config::OptimizeConfig;
+    use implicit_psdr::optimize::resolution::divisors;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse");
+    for (name, scale, expected) in [
+        ("race", ImageScale::Auto, vec![2, 1, 1]),
+        ("shadow", ImageScale::Auto, vec![1]),
+        ("named", ImageScale::Full, vec![1]),
+        ("paint", ImageScale::Full, vec![1]),
+        ("envmap_light", ImageScale::Full, vec![1]),
+        ("shape_albedo_env", ImageScale::Full, vec![1]),
+    ] {
+        let cfg = OptimizeConfig::load(&root.join(name).join("opt.json")).unwrap();
+        let s = &cfg.settings;
+        assert_eq!(s.image_scale, scale, "{name}");
+        let stages = s.upsample_at.len() + 1;
+        let d = divisors(&s.image_scale, &cfg.scene, &cfg.views, &s.grids, stages).unwrap();
+        assert_eq!(d, expected, "{name}");
+    }
+}

@@ -261,6 +261,7 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
         &o,
         upsample_at.len() + 1,
         !grids.is_empty(),
+        super::resolution::default_scale(&scene, &grids),
         (scene.camera.width, scene.camera.height),
     )?;
     if grids.is_empty() {

@@ -20,8 +20,8 @@ use super::View;
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::gradient::loss::downsample;
-use crate::scene::Scene;
 use crate::scene::json::{Obj, describe};
+use crate::scene::{BlockKind, Scene};
 use serde_json::Value;
 
 /// The divisors of the film's width and height that a stage may use (full, half, quarter).
@@ -34,28 +34,31 @@ pub const AUTO_MIN_CELL_PIXELS: f32 = 2.5;
 /// The image resolution of each grid stage (`image_scale` in `OPT.json`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum ImageScale {
-    /// The film's resolution throughout (the default).
+    /// The film's resolution throughout (the default when no SDF grid is optimised, or when a texture
+    /// or an environment map is: their texels are seen at the film's resolution).
     #[default]
     Full,
     /// One divisor per stage, in [`DIVISORS`]: the stage's views render at `width / d × height / d`.
     Stages(Vec<u32>),
     /// Per stage, the largest divisor (at most 4) at which a lattice cell of every optimised grid
-    /// still projects to at least [`AUTO_MIN_CELL_PIXELS`] in every view ([`auto_divisors`]).
+    /// still projects to at least [`AUTO_MIN_CELL_PIXELS`] in every view ([`auto_divisors`]); the
+    /// default when the optimised blocks are SDF grids (named parameters may come with them).
     Auto,
 }
 
 /// `image_scale`: a list of one scale per stage (`stages` of them; each 1, 0.5 or 0.25) or `"auto"`
 /// (only with grids to optimise). `size` is the film's `(width, height)`, which each scale must
-/// divide.
+/// divide. Absent, it is `default` ([`default_scale`]).
 pub(crate) fn parse(
     o: &Obj,
     stages: usize,
     has_grids: bool,
+    default: ImageScale,
     size: (u32, u32),
 ) -> Result<ImageScale> {
     let field = o.at("image_scale");
     match o.get("image_scale") {
-        None => Ok(ImageScale::Full),
+        None => Ok(default),
         Some(Value::String(s)) if s == "auto" => {
             if has_grids {
                 Ok(ImageScale::Auto)
@@ -110,6 +113,21 @@ pub(crate) fn parse(
                 describe(v)
             ),
         )),
+    }
+}
+
+/// `image_scale` when `OPT.json` leaves it out: [`ImageScale::Auto`] when the optimised blocks
+/// `grids` include an SDF grid and no texture or environment map (whose texels the film must
+/// resolve), else [`ImageScale::Full`].
+pub fn default_scale(scene: &Scene, grids: &[String]) -> ImageScale {
+    let kinds: Vec<BlockKind> = (scene.blocks().into_iter())
+        .filter(|b| grids.contains(&b.node))
+        .map(|b| b.kind)
+        .collect();
+    if kinds.contains(&BlockKind::Grid) && kinds.iter().all(|&k| k == BlockKind::Grid) {
+        ImageScale::Auto
+    } else {
+        ImageScale::Full
     }
 }
 
@@ -266,7 +284,7 @@ mod tests {
     fn parsed(v: serde_json::Value, stages: usize, size: (u32, u32)) -> Result<ImageScale> {
         let root = serde_json::json!({ "image_scale": v });
         let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
-        parse(&o, stages, true, size)
+        parse(&o, stages, true, ImageScale::Full, size)
     }
 
     #[test]
@@ -274,7 +292,14 @@ mod tests {
         use serde_json::json;
         let root = json!({});
         let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
-        assert_eq!(parse(&o, 3, true, (128, 128)).unwrap(), ImageScale::Full);
+        assert_eq!(
+            parse(&o, 3, true, ImageScale::Full, (128, 128)).unwrap(),
+            ImageScale::Full
+        );
+        assert_eq!(
+            parse(&o, 3, true, ImageScale::Auto, (128, 128)).unwrap(),
+            ImageScale::Auto
+        );
         assert_eq!(
             parsed(json!([0.5, 1, 0.25]), 3, (128, 64)).unwrap(),
             ImageScale::Stages(vec![2, 1, 4])
@@ -285,7 +310,9 @@ mod tests {
         );
         let root = json!({"image_scale": "auto"});
         let o = Obj::new(&root, String::new(), &["image_scale"]).unwrap();
-        let no_grids = parse(&o, 1, false, (128, 128)).unwrap_err().to_string();
+        let no_grids = parse(&o, 1, false, ImageScale::Full, (128, 128))
+            .unwrap_err()
+            .to_string();
         assert!(
             no_grids.starts_with("image_scale: \"auto\" follows"),
             "{no_grids}"
