@@ -31,6 +31,9 @@ pub const DEFAULT_DECAY: Decay = Decay::Cosine {
 pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
 /// Whether grid steps follow the lattice spacing when `learning_rate_resolution` is absent.
 pub const DEFAULT_LEARNING_RATE_RESOLUTION: bool = true;
+/// Iterations of the learning rate's ramp after each refinement when `learning_rate_warmup` is
+/// absent.
+pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;
 /// The moving average's weight on the past when `ema` is absent.
 pub const DEFAULT_EMA: f32 = 0.0;
 /// The per-entry gradient clamp (in running RMS of the entry) when `gradient_clamp` is absent.
@@ -58,6 +61,7 @@ const FIELDS: &[&str] = &[
     "learning_rate_decay",
     "learning_rate_final",
     "learning_rate_resolution",
+    "learning_rate_warmup",
     "adam",
     "gradient_clamp",
     "ema",
@@ -208,6 +212,9 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             ));
         }
     };
+    let learning_rate_warmup = o
+        .opt_int("learning_rate_warmup", 0, u32::MAX as u64)?
+        .unwrap_or(DEFAULT_LEARNING_RATE_WARMUP);
     let adam = adam_options(&o)?;
     let ema = match o.opt_f32("ema")? {
         None => DEFAULT_EMA,
@@ -273,6 +280,10 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
                 o.get("learning_rate_resolution").is_some(),
             ),
             ("laplacian", laplacian != 0.0),
+            (
+                "learning_rate_warmup",
+                o.get("learning_rate_warmup").is_some(),
+            ),
         ];
         if let Some((key, _)) = set.iter().find(|(_, s)| *s) {
             return Err(Error::field(
@@ -317,6 +328,7 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             learning_rate_params,
             learning_rate_decay,
             learning_rate_resolution,
+            learning_rate_warmup,
             adam,
             ema,
             loss_scales,

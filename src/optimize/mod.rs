@@ -72,6 +72,10 @@ pub struct Settings {
     /// Whether a grid's step size follows its lattice spacing after refinements
     /// ([`schedule::resolution_scale`]: half the starting rate at `2n − 1`, a quarter at `4n − 3`).
     pub learning_rate_resolution: bool,
+    /// Iterations `W` over which every step size ramps up after a refinement (`upsample_at`), which
+    /// restarts Adam: the `k`-th iteration after it (from 0) has `min(1, (k + 1) / W)` of the rate
+    /// ([`schedule::warmup`]); 0 for none.
+    pub learning_rate_warmup: u32,
     /// Adam's hyper-parameters and gradient clamp.
     pub adam: AdamOptions,
     /// Weight `β ∈ [0, 1)` on the past of the exponential moving average of the values
@@ -347,10 +351,11 @@ impl Optimization {
     }
 
     /// The step size of every entry at iteration `index`: the named parameters' and the grids' rates
-    /// times the decay's factor, a grid's also times its resolution's scale.
+    /// times the decay's and the warm-up's factors, a grid's also times its resolution's scale.
     fn rates(&self, index: u32) -> Result<Vec<f32>> {
         let s = &self.settings;
-        let decay = s.learning_rate_decay.factor(index, s.iterations);
+        let decay = s.learning_rate_decay.factor(index, s.iterations)
+            * schedule::warmup(index, &s.upsample_at, s.learning_rate_warmup);
         let mut rates = vec![s.learning_rate_params * decay; self.layout.params.len()];
         for (block, _) in &self.layout.grids {
             let mut rate = s.learning_rate_grids * decay;

@@ -40,6 +40,21 @@ impl Decay {
     }
 }
 
+/// The factor of the learning rate at iteration `index` for the warm-up after a refinement: with the
+/// last refinement at `u ≤ index` (of `upsample_at`), `min(1, (index − u + 1) / iterations)`; 1
+/// before the first refinement or with `iterations` 0.
+///
+/// A refinement restarts Adam, whose first steps are then about the full rate for every entry with
+/// a gradient, whatever its sign's noise (a step is `m / √v`, ±1 when `m` and `v` hold one gradient):
+/// on a shape already close to its target, a full-rate step of every lattice value near the surface
+/// undoes several iterations of progress. The ramp lets Adam's moments gather a few gradients first.
+pub fn warmup(index: u32, upsample_at: &[u32], iterations: u32) -> f32 {
+    match upsample_at.iter().filter(|&&u| u <= index).max() {
+        Some(&u) if iterations > 0 => ((index - u + 1) as f32 / iterations as f32).min(1.0),
+        _ => 1.0,
+    }
+}
+
 /// The factor of a grid's learning rate for its resolution: the grid's lattice spacing relative to its
 /// spacing at the start of the run, `(n₀ − 1) / (n − 1)` along its longest axis (`n₀` points at the
 /// start, `n` now), so that a step is the same fraction of a cell after each refinement `n → 2n − 1`
@@ -109,6 +124,22 @@ impl Ema {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The warm-up ramps from 1/W at each refinement to 1 at its W-th iteration.
+    #[test]
+    fn warmup_ramps_after_each_refinement() {
+        let at = [10, 20];
+        let got: Vec<f32> = [0, 9, 10, 11, 12, 13, 14, 15, 19, 20, 24, 30]
+            .iter()
+            .map(|&i| warmup(i, &at, 5))
+            .collect();
+        assert_eq!(
+            got,
+            [1.0, 1.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.0, 1.0, 0.2, 1.0, 1.0]
+        );
+        assert_eq!(warmup(10, &at, 0), 1.0);
+        assert_eq!(warmup(10, &[], 5), 1.0);
+    }
 
     /// The cosine and exponential schedules against their closed forms at a few iterations.
     #[test]
