@@ -527,6 +527,16 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
             "opt.json: laplacian: is a grid option",
         ),
         (
+            "warm-up without grids",
+            |o| o["learning_rate_warmup"] = json!(3),
+            "opt.json: learning_rate_warmup: is a grid option",
+        ),
+        (
+            "negative warm-up",
+            |o| o["learning_rate_warmup"] = json!(-1),
+            "opt.json: learning_rate_warmup: must be >= 0, got -1",
+        ),
+        (
             "orbit without views",
             |o| o["views"]["orbit"]["count"] = json!(0),
             "opt.json: views.orbit.count: must be >= 1",
