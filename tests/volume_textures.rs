@@ -564,7 +564,11 @@ fn optimize_recovers_an_albedo_texture() {
         "seed": 0
     });
     std::fs::write(dir.join("opt.json"), opt.to_string()).unwrap();
-    assert_success(&run(&dir, &["optimize", "opt.json", "--out", "out"]));
+    let stdout = assert_success(&run(&dir, &["optimize", "opt.json", "--out", "out"]));
+    assert!(
+        stdout.starts_with("optimized 1 volume texture over 25 iterations"),
+        "{stdout}"
+    );
     let progress = std::fs::read_to_string(dir.join("out/progress.csv")).unwrap();
     let mut lines = progress.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -35,8 +35,20 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
     if !settings.params.is_empty() {
         what.push(count(settings.params.len(), "parameter"));
     }
-    if !settings.grids.is_empty() {
-        what.push(count(settings.grids.len(), "grid"));
+    // optimize.grids names value blocks of three kinds; the summary names each kind.
+    let kinds: Vec<_> = (cfg.scene.blocks().into_iter())
+        .filter(|b| settings.grids.contains(&b.node))
+        .map(|b| b.kind)
+        .collect();
+    for (kind, noun) in [
+        (crate::scene::BlockKind::Grid, "grid"),
+        (crate::scene::BlockKind::Volume, "volume texture"),
+        (crate::scene::BlockKind::Envmap, "environment map"),
+    ] {
+        let n = kinds.iter().filter(|&&k| k == kind).count();
+        if n > 0 {
+            what.push(count(n, noun));
+        }
     }
     let loss_name = format!("{:?}", settings.loss).to_lowercase();
     let (rows, seconds) = (&outcome.rows, outcome.seconds);
