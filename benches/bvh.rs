@@ -4,6 +4,10 @@
 //! one run; then `diff` (the complete derivative of `ball0.radius`, default boundary budgets) against
 //! `render` at 1,000 balls.
 //!
+//! Then the same 1,000 balls as the children of ONE union shape (the union's own hierarchy over its
+//! children, against evaluating every child at every step, that at 1 spp) beside the 1,000 separate
+//! shapes and one ball.
+//!
 //! The machine is shared: medians and ratios. `cargo bench --bench bvh [-- REPS]` (default 3).
 
 #[path = "scenes/many_balls.rs"]
@@ -17,6 +21,29 @@ use std::time::Instant;
 
 fn scene(n: usize) -> Scene {
     parse(&many_balls::many_balls(n, 1), Path::new(".")).expect("the generated scene parses")
+}
+
+/// The scene of `n` balls with the balls made the children of one union shape named `balls`.
+fn union_scene(n: usize, culled: bool) -> Scene {
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&many_balls::many_balls(n, 1)).expect("the generated scene is JSON");
+    let shapes = doc["shapes"].as_array_mut().expect("shapes");
+    let children: Vec<serde_json::Value> = shapes.drain(..n).map(|s| s["sdf"].clone()).collect();
+    shapes.insert(
+        0,
+        serde_json::json!({
+            "name": "balls",
+            "sdf": {"type": "union", "children": children},
+            "bsdf": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+        }),
+    );
+    let mut scene = parse(&doc.to_string(), Path::new(".")).expect("the union scene parses");
+    if !culled {
+        for shape in &mut scene.shapes {
+            shape.sdf.set_culling(false);
+        }
+    }
+    scene
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -90,5 +117,38 @@ fn main() {
         t_render * 1e3,
         t_diff * 1e3,
         t_diff / t_render
+    );
+
+    // One union of 1,000 balls against 1,000 shapes and one ball.
+    let samples = (16 * 256 * 256) as f64;
+    let rate = |scene: &Scene, options: &RenderOptions, reps: usize| {
+        let spp = options.spp as f64;
+        samples / 16.0 * spp
+            / time(reps, || {
+                black_box(render(scene, options));
+            })
+            / 1e6
+    };
+    let r_one = rate(&scene(1), &options, reps);
+    let r_shapes = rate(&scene(1000), &options, reps);
+    let r_union = rate(&union_scene(1000, true), &options, reps);
+    let one_spp = RenderOptions {
+        spp: 1,
+        ..options.clone()
+    };
+    let r_plain = rate(&union_scene(1000, false), &one_spp, 1);
+    println!("1000 balls as one union shape (M samples/s, and / 1 ball):");
+    println!("  1 ball               {r_one:8.3}   1.00");
+    println!(
+        "  1000 shapes          {r_shapes:8.3}   {:.2}",
+        r_shapes / r_one
+    );
+    println!(
+        "  union, culled        {r_union:8.3}   {:.2}",
+        r_union / r_one
+    );
+    println!(
+        "  union, every child   {r_plain:8.3}   {:.4}   (1 spp, one render)",
+        r_plain / r_one
     );
 }

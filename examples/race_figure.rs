@@ -126,6 +126,8 @@ fn draw(
             chart
                 .configure_mesh()
                 .x_desc("seconds of optimisation")
+                .x_labels(6)
+                .x_label_formatter(&|x| format!("{x:.0}"))
                 .label_style(font.clone())
                 .draw()?;
             chart.draw_series(LineSeries::new(ours, OURS_COLOUR.stroke_width(2)))?;
@@ -135,6 +137,8 @@ fn draw(
             chart
                 .configure_mesh()
                 .x_desc("seconds of optimisation")
+                .x_labels(6)
+                .x_label_formatter(&|x| format!("{x:.0}"))
                 .label_style(font.clone())
                 .draw()?;
             chart

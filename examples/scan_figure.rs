@@ -182,6 +182,8 @@ fn draw(buffer: &mut [u8], size: (u32, u32), rows: &[Vec<Vec<f64>>]) -> Result<(
         chart
             .configure_mesh()
             .x_desc("seconds of optimisation")
+            .x_labels(6)
+            .x_label_formatter(&|x| format!("{x:.0}"))
             .label_style(font.clone())
             .draw()?;
         for (run, (colour, label)) in rows

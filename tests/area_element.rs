@@ -39,7 +39,7 @@ mod common;
 use common::Rng;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::scene::Shape;
-use implicit_psdr::sdf::{Sdf, bake};
+use implicit_psdr::sdf::{Children, Sdf, bake};
 use implicit_psdr::{Param, Param3, Scalar, Vec3};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
@@ -647,7 +647,7 @@ fn blob(k: Param, cx: Param) -> Shape {
     let mut c0 = Param3::new([-0.45, 0.0, 0.0]);
     c0.c[0] = cx;
     shape(Sdf::SmoothUnion {
-        children: vec![
+        children: Children::new(vec![
             Sdf::Sphere {
                 center: c0,
                 radius: Param::new(0.5),
@@ -656,7 +656,7 @@ fn blob(k: Param, cx: Param) -> Shape {
                 center: Param3::new([0.45, 0.05, 0.0]),
                 radius: Param::new(0.4),
             },
-        ],
+        ]),
         k,
     })
 }

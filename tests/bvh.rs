@@ -82,7 +82,7 @@ fn random_scene(n: usize, seed: u64, offset: Vec3, plane: bool) -> Scene {
                     Sdf::sphere((c + d).to_array(), 0.7 * r),
                 ];
                 if i % 12 == 5 {
-                    Sdf::Union(pair)
+                    Sdf::union(pair)
                 } else {
                     Sdf::smooth_union(pair, 0.3 * r)
                 }

@@ -527,6 +527,16 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
             "opt.json: laplacian: is a grid option",
         ),
         (
+            "warm-up without grids",
+            |o| o["learning_rate_warmup"] = json!(3),
+            "opt.json: learning_rate_warmup: is a grid option",
+        ),
+        (
+            "negative warm-up",
+            |o| o["learning_rate_warmup"] = json!(-1),
+            "opt.json: learning_rate_warmup: must be >= 0, got -1",
+        ),
+        (
             "orbit without views",
             |o| o["views"]["orbit"]["count"] = json!(0),
             "opt.json: views.orbit.count: must be >= 1",
@@ -569,6 +579,26 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
             "missing image",
             |o| o["target"] = json!({"images": ["v0.exr", "v9.exr"]}),
             "opt.json: target.images[1]: file v9.exr not found",
+        ),
+        (
+            "image scale not a list",
+            |o| o["image_scale"] = json!(0.5),
+            "opt.json: image_scale: expected a list of scales",
+        ),
+        (
+            "image scale of another stage count",
+            |o| o["image_scale"] = json!([0.5, 1]),
+            "opt.json: image_scale: needs one scale per grid stage (1",
+        ),
+        (
+            "image scale not a power of two",
+            |o| o["image_scale"] = json!([0.3]),
+            "opt.json: image_scale[0]: expected 1, 0.5 or 0.25",
+        ),
+        (
+            "automatic image scale without grids",
+            |o| o["image_scale"] = json!("auto"),
+            "opt.json: image_scale: \"auto\" follows the grids' cells",
         ),
         (
             "upsample beyond the run",

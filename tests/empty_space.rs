@@ -14,7 +14,7 @@ use implicit_psdr::sdf::{EmptySpace, Sdf, bake};
 use implicit_psdr::trace::{ShapeTrace, TraceSettings};
 
 fn blob() -> Shape {
-    let lobes = Sdf::Union(vec![
+    let lobes = Sdf::union(vec![
         Sdf::sphere([-0.5, 0.0, 0.0], 0.7),
         Sdf::sphere([0.55, 0.2, 0.1], 0.55),
     ]);

@@ -877,7 +877,7 @@ fn hard_case_light_touching_an_occluder_is_finite() {
 #[test]
 fn hard_case_camera_inside_a_grid_room_is_finite() {
     let dir = common::workdir("gradient", "room");
-    let room = Sdf::Difference(vec![
+    let room = Sdf::difference(vec![
         Sdf::cuboid([0.0; 3], [1.5, 1.5, 1.5], 0.3),
         Sdf::sphere([0.0; 3], 1.15),
     ]);

@@ -2,7 +2,9 @@
 //! light's position converge to the values that rendered the target.
 
 use implicit_psdr::integrator::Loss;
-use implicit_psdr::optimize::{Optimization, Settings, Terms, View, render_targets};
+use implicit_psdr::optimize::{
+    AdamOptions, Decay, ImageScale, Optimization, Settings, Terms, View, render_targets,
+};
 use implicit_psdr::scene::{Scene, parse};
 
 /// A ball on a floor under a rectangle light and a dim sky, 32×32. The ball sits at `x = 0.5` rather
@@ -48,6 +50,13 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
         loss: Loss::L2,
         learning_rate_grids: 0.0,
         learning_rate_params: 0.02,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        learning_rate_warmup: 0,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
+        image_scale: ImageScale::Full,
         views_per_iteration: None,
         seed: 1,
         terms: Terms::Complete,
@@ -148,6 +157,13 @@ fn grid_run(terms: Terms, seed: u64) -> (f64, f64, f64, f64) {
         loss: Loss::L2,
         learning_rate_grids: 0.02,
         learning_rate_params: 0.0,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        learning_rate_warmup: 0,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
+        image_scale: ImageScale::Full,
         views_per_iteration: None,
         seed,
         terms,
@@ -183,6 +199,109 @@ fn a_grid_moves_towards_the_target_shape_only_with_the_boundary_terms() {
     );
 }
 
+/// Coarse-to-fine image resolution: the 16³ problem on a 48×48 film rendered at half resolution (the
+/// 24×24 of the test above) for 20 iterations, then refined to 31³ and rendered at full resolution for
+/// 2. At half resolution the loss falls and the IoU rises as at 24×24; the full-resolution iterations
+/// after it run, and their loss (against the full targets) is of the same order.
+#[test]
+fn a_grid_moves_towards_the_target_at_half_resolution_then_refines_at_full() {
+    use implicit_psdr::optimize::orbit;
+    let dir = std::env::temp_dir().join(format!("psdr-optimize-half-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (start, target) = grid_scenes(&dir, 48);
+    let views = orbit(4, 3.5, &[1.5], glam::Vec3::ZERO, 40.0);
+    let targets = render_targets(&target, &views, 64, 500).unwrap();
+    let settings = Settings {
+        params: vec![],
+        grids: vec!["blob".into()],
+        iterations: 0,
+        spp: 4,
+        loss: Loss::L2,
+        learning_rate_grids: 0.02,
+        learning_rate_params: 0.0,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        learning_rate_warmup: 0,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
+        image_scale: ImageScale::Stages(vec![2, 1]),
+        views_per_iteration: None,
+        seed: 3,
+        terms: Terms::Complete,
+        upsample_at: vec![20],
+        redistance_every: Some(10),
+        laplacian: 0.0,
+    };
+    let before = blob_iou(&start, &target);
+    let mut opt = Optimization::new(start, views, targets, settings).unwrap();
+    assert_eq!(opt.stage_divisors, [2, 1]);
+    assert_eq!((opt.divisor_at(19), opt.divisor_at(20)), (2, 1));
+    let losses: Vec<f64> = (0..20).map(|_| opt.step().unwrap().loss).collect();
+    let half = blob_iou(&opt.scene, &target);
+    let last = losses[15..].iter().sum::<f64>() / 5.0;
+    println!(
+        "half resolution: loss {} -> {last}; IoU {before} -> {half}",
+        losses[0]
+    );
+    assert!(last < 0.8 * losses[0], "loss {} -> {last}", losses[0]);
+    assert!(half > before + 0.2, "IoU {before} -> {half}");
+    let full: Vec<f64> = (0..2).map(|_| opt.step().unwrap().loss).collect();
+    let after = blob_iou(&opt.scene, &target);
+    println!("full resolution: loss {full:?}; IoU {after}");
+    assert_eq!(opt.scene.grid_values("blob").unwrap().dims, [31, 31, 31]);
+    assert!(
+        full.iter().all(|l| l.is_finite() && *l < 2.0 * losses[0]),
+        "{full:?}"
+    );
+    assert!(after > before + 0.2, "IoU {before} -> {after}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `image_scale: "auto"` on the race: a 16³ cell over the unit cube seen from at most 2.085 away
+/// with a 39° field of view on a 128-pixel film projects to `(64 / tan 19.5°) / 15 / 2.085 = 5.78`
+/// pixels, 2.89 at half resolution (≥ 2.5) and 1.44 at a quarter; at 31³ it is 2.89 at full
+/// resolution. So: half, full, full.
+#[test]
+fn automatic_image_scale_on_the_race_is_half_then_full() {
+    use implicit_psdr::optimize::config::OptimizeConfig;
+    use implicit_psdr::optimize::resolution::auto_divisors;
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse/race/opt.json");
+    let cfg = OptimizeConfig::load(&path).unwrap();
+    let d = auto_divisors(&cfg.scene, &cfg.views, &cfg.settings.grids, 3).unwrap();
+    assert_eq!(d, [2, 1, 1]);
+    // Nearer views (the same views at 3/4 of their distance): a cell is 7.7 pixels, a quarter 1.9;
+    // at 31³ half is 1.9 again.
+    let centre = glam::Vec3::splat(0.5);
+    let near: Vec<View> = (cfg.views.iter())
+        .map(|v| View {
+            origin: centre + 0.75 * (v.origin - centre),
+            ..*v
+        })
+        .collect();
+    assert_eq!(
+        auto_divisors(&cfg.scene, &near, &cfg.settings.grids, 3).unwrap(),
+        [2, 1, 1]
+    );
+    // Twice as near: 11.6 pixels at 16³ (quarter: 2.9), 5.8 at 31³ (half: 2.9), 2.9 at 61³.
+    let near: Vec<View> = (cfg.views.iter())
+        .map(|v| View {
+            origin: centre + 0.5 * (v.origin - centre),
+            ..*v
+        })
+        .collect();
+    assert_eq!(
+        auto_divisors(&cfg.scene, &near, &cfg.settings.grids, 3).unwrap(),
+        [4, 2, 1]
+    );
+    // No grid named: full resolution.
+    assert_eq!(
+        auto_divisors(&cfg.scene, &cfg.views, &[], 2).unwrap(),
+        [1, 1]
+    );
+}
+
 /// The examples in `scenes/inverse/` stay loadable: their OPT.json, both scenes and the grids they name.
 #[test]
 fn inverse_examples_load() {
@@ -195,4 +314,30 @@ fn inverse_examples_load() {
         count += 1;
     }
     assert!(count >= 3, "{count} examples");
+}
+
+/// Left out of `OPT.json`, `image_scale` is `"auto"` when only SDF grids (and named parameters) are
+/// optimised, and full resolution when a texture or an environment map is (their texels are seen
+/// at the film's resolution): on the race, whose 16³ cells project to about 6 pixels, the first
+/// stage renders at half size; the examples that optimise texels stay at full size.
+#[test]
+fn image_scale_defaults_to_auto_only_for_sdf_grids() {
+    use implicit_psdr::optimize::config::OptimizeConfig;
+    use implicit_psdr::optimize::resolution::divisors;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse");
+    for (name, scale, expected) in [
+        ("race", ImageScale::Auto, vec![2, 1, 1]),
+        ("shadow", ImageScale::Auto, vec![1]),
+        ("named", ImageScale::Full, vec![1]),
+        ("paint", ImageScale::Full, vec![1]),
+        ("envmap_light", ImageScale::Full, vec![1]),
+        ("shape_albedo_env", ImageScale::Full, vec![1]),
+    ] {
+        let cfg = OptimizeConfig::load(&root.join(name).join("opt.json")).unwrap();
+        let s = &cfg.settings;
+        assert_eq!(s.image_scale, scale, "{name}");
+        let stages = s.upsample_at.len() + 1;
+        let d = divisors(&s.image_scale, &cfg.scene, &cfg.views, &s.grids, stages).unwrap();
+        assert_eq!(d, expected, "{name}");
+    }
 }

@@ -303,15 +303,15 @@ sdf_suite! {
     sharp_cylinder: Sdf::cylinder(Vec3::new(0.1, 0.0, 0.0), Vec3::Z, 0.7, 0.4, 0.0), EXACT;
     capsule: Sdf::capsule(Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.3, 0.2), 0.4), EXACT;
     plane: Sdf::plane(Vec3::new(0.2, 1.0, 0.1), 0.3), EXACT;
-    union: Sdf::Union(vec![
+    union: Sdf::union(vec![
         Sdf::sphere(Vec3::new(-0.5, 0.0, 0.0), 0.7),
         Sdf::cuboid(Vec3::new(0.6, 0.2, 0.0), Vec3::splat(0.5), 0.1),
     ]), EXACT;
-    intersection: Sdf::Intersection(vec![
+    intersection: Sdf::intersection(vec![
         Sdf::sphere(Vec3::ZERO, 1.0),
         Sdf::cuboid(Vec3::new(0.3, 0.0, 0.0), Vec3::splat(0.8), 0.0),
     ]), EXACT;
-    difference: Sdf::Difference(vec![
+    difference: Sdf::difference(vec![
         Sdf::cuboid(Vec3::ZERO, Vec3::splat(0.8), 0.1),
         Sdf::sphere(Vec3::new(0.5, 0.5, 0.5), 0.6),
     ]), EXACT;
@@ -766,10 +766,10 @@ fn piecewise_flat_shapes() {
     let ball = Sdf::sphere([0.0, 0.0, 0.0], 1.0);
     assert!(sharp.is_piecewise_flat());
     assert!(plane.is_piecewise_flat());
-    assert!(Sdf::Union(vec![sharp.clone(), plane.clone()]).is_piecewise_flat());
+    assert!(Sdf::union(vec![sharp.clone(), plane.clone()]).is_piecewise_flat());
     assert!(!rounded.is_piecewise_flat());
     assert!(!ball.is_piecewise_flat());
-    assert!(!Sdf::Difference(vec![sharp.clone(), ball.clone()]).is_piecewise_flat());
+    assert!(!Sdf::difference(vec![sharp.clone(), ball.clone()]).is_piecewise_flat());
     assert!(!Sdf::smooth_union(vec![sharp.clone(), plane], 0.1).is_piecewise_flat());
 }
 

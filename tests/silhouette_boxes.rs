@@ -60,21 +60,21 @@ fn nodes() -> Vec<(&'static str, Sdf)> {
         ("plane", Sdf::plane(Vec3::new(0.2, 1.0, 0.1), 0.3)),
         (
             "union",
-            Sdf::Union(vec![
+            Sdf::union(vec![
                 Sdf::sphere([-0.4, 0.0, 0.0], 0.5),
                 Sdf::cuboid([0.4, 0.0, 0.0], [0.4; 3], 0.05),
             ]),
         ),
         (
             "intersection",
-            Sdf::Intersection(vec![
+            Sdf::intersection(vec![
                 Sdf::sphere([0.0; 3], 0.8),
                 Sdf::cuboid([0.0; 3], [0.6; 3], 0.0),
             ]),
         ),
         (
             "difference",
-            Sdf::Difference(vec![
+            Sdf::difference(vec![
                 Sdf::cuboid([0.0; 3], [0.6; 3], 0.05),
                 Sdf::sphere([0.3, 0.3, 0.3], 0.5),
             ]),

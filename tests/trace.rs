@@ -198,7 +198,7 @@ fn all_hits_on_two_spheres_in_a_row() {
     let b = Vec3::new(3.0, 0.2, 0.0);
     let sdf_a = sphere(a.to_array(), 1.0);
     let sdf_b = sphere(b.to_array(), 0.8);
-    let union = Sdf::Union(vec![sdf_a.clone(), sdf_b.clone()]);
+    let union = Sdf::union(vec![sdf_a.clone(), sdf_b.clone()]);
     let settings = TraceSettings::default();
     for i in 0..200u64 {
         let mut s = Sampler::new(4, 0, i, 0);

@@ -1,5 +1,33 @@
-//! Adam (Kingma and Ba, "Adam: A Method for Stochastic Optimization", ICLR 2015), with the paper's
-//! defaults `β₁ = 0.9`, `β₂ = 0.999`, `ε = 1e-8` and a learning rate per entry.
+//! Adam (Kingma and Ba, "Adam: A Method for Stochastic Optimization", ICLR 2015), with a learning rate
+//! per entry, configurable `β₁`, `β₂`, `ε` (the paper's defaults `0.9`, `0.999`, `1e-8`) and an optional
+//! per-entry clamp of the gradient relative to Adam's own running scale of that entry.
+
+/// Adam's hyper-parameters.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct AdamOptions {
+    /// First-moment decay `β₁ ∈ [0, 1)`.
+    pub beta1: f64,
+    /// Second-moment decay `β₂ ∈ [0, 1)`.
+    pub beta2: f64,
+    /// Denominator guard `ε > 0`, in the gradient's units.
+    pub epsilon: f64,
+    /// Per-entry gradient clamp `k`: from the second step on, entry `i` of the gradient is clamped to
+    /// `± k · √v̂ᵢ`, `v̂ᵢ` the bias-corrected second moment before this step (the entry's running RMS);
+    /// entries with no history yet (`v̂ᵢ = 0`) are left as they are. `None`: no clamp.
+    pub clamp: Option<f64>,
+}
+
+impl Default for AdamOptions {
+    /// The paper's `β₁ = 0.9`, `β₂ = 0.999`, `ε = 1e-8`, no clamp.
+    fn default() -> Self {
+        Self {
+            beta1: 0.9,
+            beta2: 0.999,
+            epsilon: 1e-8,
+            clamp: None,
+        }
+    }
+}
 
 /// Adam's moment estimates for a vector of parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -7,45 +35,56 @@ pub struct Adam {
     m: Vec<f64>,
     v: Vec<f64>,
     t: i32,
+    options: AdamOptions,
 }
 
 impl Adam {
-    /// First-moment decay.
-    pub const BETA1: f64 = 0.9;
-    /// Second-moment decay.
-    pub const BETA2: f64 = 0.999;
-    /// Denominator guard.
-    pub const EPS: f64 = 1e-8;
-
-    /// Zero moments for `n` parameters.
+    /// Zero moments for `n` parameters, the paper's hyper-parameters.
     pub fn new(n: usize) -> Self {
+        Self::with_options(n, AdamOptions::default())
+    }
+
+    /// Zero moments for `n` parameters and the given hyper-parameters.
+    pub fn with_options(n: usize, options: AdamOptions) -> Self {
         Self {
             m: vec![0.0; n],
             v: vec![0.0; n],
             t: 0,
+            options,
         }
     }
 
     /// The values after one step from `values` along the gradient `gradient`, entry `i` with step size
     /// `rates[i]`: `x − rate · m̂ / (√v̂ + ε)` with bias-corrected moments. A step moves each entry by
-    /// about its rate at most.
+    /// about its rate at most. Non-finite gradient entries count as 0.
     pub fn step(&mut self, values: &[f32], gradient: &[f64], rates: &[f32]) -> Vec<f32> {
+        let AdamOptions {
+            beta1,
+            beta2,
+            epsilon,
+            clamp,
+        } = self.options;
+        // The bias correction of the second moment as it stands before this step.
+        let previous = 1.0 - beta2.powi(self.t);
         self.t += 1;
-        let (c1, c2) = (
-            1.0 - Self::BETA1.powi(self.t),
-            1.0 - Self::BETA2.powi(self.t),
-        );
+        let (c1, c2) = (1.0 - beta1.powi(self.t), 1.0 - beta2.powi(self.t));
         values
             .iter()
             .zip(gradient)
             .zip(rates)
             .enumerate()
             .map(|(i, ((&x, &g), &rate))| {
-                let g = if g.is_finite() { g } else { 0.0 };
-                self.m[i] = Self::BETA1 * self.m[i] + (1.0 - Self::BETA1) * g;
-                self.v[i] = Self::BETA2 * self.v[i] + (1.0 - Self::BETA2) * g * g;
+                let mut g = if g.is_finite() { g } else { 0.0 };
+                if let Some(k) = clamp
+                    && self.v[i] > 0.0
+                {
+                    let bound = k * (self.v[i] / previous).sqrt();
+                    g = g.clamp(-bound, bound);
+                }
+                self.m[i] = beta1 * self.m[i] + (1.0 - beta1) * g;
+                self.v[i] = beta2 * self.v[i] + (1.0 - beta2) * g * g;
                 let (m, v) = (self.m[i] / c1, self.v[i] / c2);
-                (x as f64 - rate as f64 * m / (v.sqrt() + Self::EPS)) as f32
+                (x as f64 - rate as f64 * m / (v.sqrt() + epsilon)) as f32
             })
             .collect()
     }
@@ -78,5 +117,44 @@ mod tests {
         let x = adam.step(&[1.0, 1.0], &[3.0, -1e-3], &[0.1, 0.2]);
         assert!((x[0] - 0.9).abs() < 1e-6, "{x:?}");
         assert!((x[1] - 1.2).abs() < 0.2 * 1e-5 + 1e-6, "{x:?}");
+    }
+
+    /// The clamp: after a step with gradient 1 (`v̂ = 1`), a spike of 100 enters as `k = 2`, so the
+    /// moments and the step are those of an unclamped Adam fed 1 then 2; the first step and an entry
+    /// without history are not clamped.
+    #[test]
+    fn clamp_bounds_spikes_by_the_running_scale() {
+        let options = AdamOptions {
+            clamp: Some(2.0),
+            ..AdamOptions::default()
+        };
+        let mut clamped = Adam::with_options(2, options);
+        let mut plain = Adam::new(2);
+        let rates = [0.1, 0.1];
+        let a = clamped.step(&[0.0, 0.0], &[1.0, 0.0], &rates);
+        let b = plain.step(&[0.0, 0.0], &[1.0, 0.0], &rates);
+        assert_eq!(a, b);
+        // Entry 1 had gradient 0 so far (v = 0): its 50 is not clamped.
+        let a = clamped.step(&a, &[100.0, 50.0], &rates);
+        let b = plain.step(&b, &[2.0, 50.0], &rates);
+        assert_eq!(a, b);
+        assert_eq!(clamped.m, plain.m);
+        assert_eq!(clamped.v, plain.v);
+    }
+
+    /// `β₂` and `ε` are used as given: with `β₁ = 0`, `β₂ = 0`, the step is `rate · g / (|g| + ε)`.
+    #[test]
+    fn betas_and_epsilon_are_used() {
+        let options = AdamOptions {
+            beta1: 0.0,
+            beta2: 0.0,
+            epsilon: 1.0,
+            clamp: None,
+        };
+        let mut adam = Adam::with_options(1, options);
+        let x = adam.step(&[0.0], &[1.0], &[0.1]);
+        assert!((x[0] + 0.05).abs() < 1e-7, "{x:?}");
+        let x = adam.step(&x, &[-3.0], &[0.1]);
+        assert!((x[0] - (-0.05 + 0.075)).abs() < 1e-7, "{x:?}");
     }
 }

@@ -5,7 +5,7 @@
 //! the scenes load, the views are valid cameras, the target images exist, are readable and have the
 //! scene's image size, and the parameters and grids to optimise exist.
 
-use super::{Settings, Terms, View, orbit};
+use super::{AdamOptions, Decay, Settings, Terms, View, orbit};
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::Loss;
@@ -18,8 +18,30 @@ use std::path::{Path, PathBuf};
 
 /// Samples per pixel per view per iteration when `spp` is absent.
 pub const DEFAULT_SPP: u32 = 16;
-/// Adam's step size (grids and parameters) when `learning_rate` is absent.
+/// Adam's step size for named parameters when `learning_rate` is absent.
 pub const DEFAULT_LEARNING_RATE: f32 = 0.01;
+/// Adam's step size for grid values (scene units, at the starting resolution and iteration 0) when
+/// `learning_rate` is absent.
+pub const DEFAULT_LEARNING_RATE_GRIDS: f32 = 0.04;
+/// The learning rate's decay when `learning_rate_decay` is absent.
+pub const DEFAULT_DECAY: Decay = Decay::Cosine {
+    final_fraction: DEFAULT_LEARNING_RATE_FINAL,
+};
+/// The fraction of the learning rate left at the last iteration when `learning_rate_final` is absent.
+pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
+/// Whether grid steps follow the lattice spacing when `learning_rate_resolution` is absent.
+pub const DEFAULT_LEARNING_RATE_RESOLUTION: bool = true;
+/// Iterations of the learning rate's ramp after each refinement when `learning_rate_warmup` is
+/// absent.
+pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;
+/// The moving average's weight on the past when `ema` is absent.
+pub const DEFAULT_EMA: f32 = 0.0;
+/// The per-entry gradient clamp (in running RMS of the entry) when `gradient_clamp` is absent.
+pub const DEFAULT_GRADIENT_CLAMP: Option<f64> = None;
+/// Levels of the loss's image pyramid when `loss_scales` is absent.
+pub const DEFAULT_LOSS_SCALES: u32 = 1;
+/// Redistancing period of the optimised grids when `redistance_every` is absent.
+pub const DEFAULT_REDISTANCE_EVERY: Option<u32> = Some(1);
 /// Samples per pixel of targets rendered from a scene when `target_spp` is absent.
 pub const DEFAULT_TARGET_SPP: u32 = 256;
 /// Most views an orbit may generate (a guard against typos).
@@ -36,6 +58,15 @@ const FIELDS: &[&str] = &[
     "spp",
     "loss",
     "learning_rate",
+    "learning_rate_decay",
+    "learning_rate_final",
+    "learning_rate_resolution",
+    "learning_rate_warmup",
+    "adam",
+    "gradient_clamp",
+    "ema",
+    "loss_scales",
+    "image_scale",
     "views_per_iteration",
     "seed",
     "target_spp",
@@ -48,6 +79,7 @@ const FIELDS: &[&str] = &[
 ];
 const LOSSES: &[&str] = &["l2", "l1"];
 const TERMS: &[&str] = &["complete", "interior"];
+const DECAYS: &[&str] = &["none", "cosine", "exponential"];
 
 /// What the optimisation should match.
 #[derive(Clone, Debug)]
@@ -169,6 +201,34 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
         Some(_) => Loss::L1,
     };
     let (learning_rate_grids, learning_rate_params) = learning_rates(&o)?;
+    let learning_rate_decay = decay(&o)?;
+    let learning_rate_resolution = match o.get("learning_rate_resolution") {
+        None => DEFAULT_LEARNING_RATE_RESOLUTION,
+        Some(Value::Bool(b)) => *b,
+        Some(v) => {
+            return Err(Error::field(
+                o.at("learning_rate_resolution"),
+                format!("expected true or false, got {}", describe(v)),
+            ));
+        }
+    };
+    let learning_rate_warmup = o
+        .opt_int("learning_rate_warmup", 0, u32::MAX as u64)?
+        .unwrap_or(DEFAULT_LEARNING_RATE_WARMUP);
+    let adam = adam_options(&o)?;
+    let ema = match o.opt_f32("ema")? {
+        None => DEFAULT_EMA,
+        Some(b) if (0.0..1.0).contains(&b) => b,
+        Some(b) => {
+            return Err(Error::field(
+                o.at("ema"),
+                format!("must be in [0, 1), got {b}"),
+            ));
+        }
+    };
+    let loss_scales = o
+        .opt_int("loss_scales", 1, 16)?
+        .unwrap_or(DEFAULT_LOSS_SCALES);
     let views_per_iteration = match o.opt_int("views_per_iteration", 1, u32::MAX as u64)? {
         Some(k) if k as usize > views.len() => {
             return Err(Error::field(
@@ -188,7 +248,12 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
 
     // Grid options: only with grids to optimise.
     let upsample_at = upsample_at(&o, iterations)?;
-    let redistance_every = o.opt_int("redistance_every", 1, u32::MAX as u64)?;
+    let redistance_every = match o.get("redistance_every") {
+        None => DEFAULT_REDISTANCE_EVERY,
+        Some(_) => o
+            .opt_int("redistance_every", 0, u32::MAX as u64)?
+            .filter(|&k| k > 0),
+    };
     let laplacian = match o.opt_f32("laplacian")? {
         None => 0.0,
         Some(w) if w >= 0.0 => w,
@@ -199,11 +264,26 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             ));
         }
     };
+    let image_scale = super::resolution::parse(
+        &o,
+        upsample_at.len() + 1,
+        !grids.is_empty(),
+        super::resolution::default_scale(&scene, &grids),
+        (scene.camera.width, scene.camera.height),
+    )?;
     if grids.is_empty() {
         let set = [
             ("upsample_at", !upsample_at.is_empty()),
-            ("redistance_every", redistance_every.is_some()),
+            ("redistance_every", o.get("redistance_every").is_some()),
+            (
+                "learning_rate_resolution",
+                o.get("learning_rate_resolution").is_some(),
+            ),
             ("laplacian", laplacian != 0.0),
+            (
+                "learning_rate_warmup",
+                o.get("learning_rate_warmup").is_some(),
+            ),
         ];
         if let Some((key, _)) = set.iter().find(|(_, s)| *s) {
             return Err(Error::field(
@@ -246,6 +326,13 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
             loss,
             learning_rate_grids,
             learning_rate_params,
+            learning_rate_decay,
+            learning_rate_resolution,
+            learning_rate_warmup,
+            adam,
+            ema,
+            loss_scales,
+            image_scale,
             views_per_iteration,
             seed,
             terms,
@@ -323,22 +410,24 @@ fn positive(v: &Value, field: &str) -> Result<f32> {
 }
 
 /// `learning_rate`: one number for both, or `{"grids": x, "params": y}` (each defaults to
-/// [`DEFAULT_LEARNING_RATE`]). Returns `(grids, params)`.
+/// [`DEFAULT_LEARNING_RATE_GRIDS`] and [`DEFAULT_LEARNING_RATE`]). Returns `(grids, params)`.
 fn learning_rates(o: &Obj) -> Result<(f32, f32)> {
     let field = o.at("learning_rate");
     match o.get("learning_rate") {
-        None => Ok((DEFAULT_LEARNING_RATE, DEFAULT_LEARNING_RATE)),
+        None => Ok((DEFAULT_LEARNING_RATE_GRIDS, DEFAULT_LEARNING_RATE)),
         Some(v @ Value::Number(_)) => {
             let x = positive(v, &field)?;
             Ok((x, x))
         }
         Some(v @ Value::Object(_)) => {
             let r = Obj::new(v, field, &["grids", "params"])?;
-            let rate = |key: &str| {
-                r.get(key)
-                    .map_or(Ok(DEFAULT_LEARNING_RATE), |v| positive(v, &r.at(key)))
+            let rate = |key: &str, default: f32| {
+                r.get(key).map_or(Ok(default), |v| positive(v, &r.at(key)))
             };
-            Ok((rate("grids")?, rate("params")?))
+            Ok((
+                rate("grids", DEFAULT_LEARNING_RATE_GRIDS)?,
+                rate("params", DEFAULT_LEARNING_RATE)?,
+            ))
         }
         Some(v) => Err(Error::field(
             field,
@@ -348,6 +437,71 @@ fn learning_rates(o: &Obj) -> Result<(f32, f32)> {
             ),
         )),
     }
+}
+
+/// `learning_rate_decay` (`"none"`, `"cosine"` or `"exponential"`) and `learning_rate_final` (the
+/// fraction of the rate left at the last iteration, in `(0, 1]`).
+fn decay(o: &Obj) -> Result<Decay> {
+    let final_fraction = match o.opt_f32("learning_rate_final")? {
+        None => DEFAULT_LEARNING_RATE_FINAL,
+        Some(f) if f > 0.0 && f <= 1.0 => f,
+        Some(f) => {
+            return Err(Error::field(
+                o.at("learning_rate_final"),
+                format!("must be in (0, 1], got {f}"),
+            ));
+        }
+    };
+    Ok(match choice(o, "learning_rate_decay", DECAYS)? {
+        None => match DEFAULT_DECAY {
+            Decay::None => Decay::None,
+            Decay::Cosine { .. } => Decay::Cosine { final_fraction },
+            Decay::Exponential { .. } => Decay::Exponential { final_fraction },
+        },
+        Some("none") => Decay::None,
+        Some("cosine") => Decay::Cosine { final_fraction },
+        Some(_) => Decay::Exponential { final_fraction },
+    })
+}
+
+/// `adam` (`{"beta1": b1, "beta2": b2, "epsilon": e}`, each optional) and `gradient_clamp` (a number
+/// > 0, or 0 for none).
+fn adam_options(o: &Obj) -> Result<AdamOptions> {
+    let mut options = AdamOptions {
+        clamp: DEFAULT_GRADIENT_CLAMP,
+        ..AdamOptions::default()
+    };
+    match o.opt_f32("gradient_clamp")? {
+        None => {}
+        Some(0.0) => options.clamp = None,
+        Some(k) if k > 0.0 => options.clamp = Some(k as f64),
+        Some(k) => {
+            return Err(Error::field(
+                o.at("gradient_clamp"),
+                format!("must be >= 0, got {k}"),
+            ));
+        }
+    }
+    let Some(v) = o.get("adam") else {
+        return Ok(options);
+    };
+    let a = Obj::new(v, o.at("adam"), &["beta1", "beta2", "epsilon"])?;
+    for (key, slot) in [("beta1", &mut options.beta1), ("beta2", &mut options.beta2)] {
+        match a.opt_f32(key)? {
+            None => {}
+            Some(b) if (0.0..1.0).contains(&b) => *slot = b as f64,
+            Some(b) => {
+                return Err(Error::field(
+                    a.at(key),
+                    format!("must be in [0, 1), got {b}"),
+                ));
+            }
+        }
+    }
+    if let Some(v) = a.get("epsilon") {
+        options.epsilon = positive(v, &a.at("epsilon"))? as f64;
+    }
+    Ok(options)
 }
 
 /// `seed`: an integer in `[0, 2^64)` (default 0).

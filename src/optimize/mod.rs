@@ -15,13 +15,17 @@ pub mod config;
 pub mod metrics;
 pub mod pictures;
 pub mod progress;
+pub mod resolution;
 pub mod run;
+pub mod schedule;
 pub mod targets;
 mod views;
 
-pub use adam::Adam;
+pub use adam::{Adam, AdamOptions};
 pub use progress::Row;
+pub use resolution::ImageScale;
 pub use run::{Observer, Outcome, Status, run};
+pub use schedule::{Decay, Ema};
 pub use views::{View, orbit};
 
 use crate::error::{Error, Result};
@@ -58,10 +62,29 @@ pub struct Settings {
     pub spp: u32,
     /// The image loss.
     pub loss: Loss,
-    /// Adam's step size for grid values, in the units of the values (scene units).
+    /// Adam's step size for grid values, in the units of the values (scene units), at iteration 0 and
+    /// the grids' starting resolution.
     pub learning_rate_grids: f32,
-    /// Adam's step size for named parameters, in each parameter's units.
+    /// Adam's step size for named parameters, in each parameter's units, at iteration 0.
     pub learning_rate_params: f32,
+    /// How both step sizes decay over the run.
+    pub learning_rate_decay: Decay,
+    /// Whether a grid's step size follows its lattice spacing after refinements
+    /// ([`schedule::resolution_scale`]: half the starting rate at `2n − 1`, a quarter at `4n − 3`).
+    pub learning_rate_resolution: bool,
+    /// Iterations `W` over which every step size ramps up after a refinement (`upsample_at`), which
+    /// restarts Adam: the `k`-th iteration after it (from 0) has `min(1, (k + 1) / W)` of the rate
+    /// ([`schedule::warmup`]); 0 for none.
+    pub learning_rate_warmup: u32,
+    /// Adam's hyper-parameters and gradient clamp.
+    pub adam: AdamOptions,
+    /// Weight `β ∈ [0, 1)` on the past of the exponential moving average of the values
+    /// ([`Optimization::averaged_scene`]), the result of the run; 0: the last values.
+    pub ema: f32,
+    /// Levels of the image pyramid of the loss ([`Loss::multiscale`]); 1: the plain loss.
+    pub loss_scales: u32,
+    /// The views' image resolution in each grid stage ([`resolution`]); full by default.
+    pub image_scale: ImageScale,
     /// Views per iteration, drawn without replacement from the seed (`None`: all).
     pub views_per_iteration: Option<usize>,
     /// Seed of the view choice and of every render.
@@ -124,6 +147,14 @@ pub struct Optimization {
     pub settings: Settings,
     layout: GradientLayout,
     adam: Adam,
+    /// The moving average of the values in layout order (`None` when `ema` is 0).
+    ema: Option<Ema>,
+    /// The optimised grids' dimensions at the start (for [`Settings::learning_rate_resolution`]).
+    start_dims: Vec<(String, [usize; 3])>,
+    /// The divisor of the film's width and height in each grid stage ([`Settings::image_scale`]).
+    pub stage_divisors: Vec<u32>,
+    /// The targets reduced by each divisor > 1 that a stage uses.
+    reduced_targets: Vec<(u32, Vec<Image>)>,
     /// Iterations done.
     pub done: u32,
 }
@@ -167,7 +198,28 @@ impl Optimization {
             ));
         }
         let layout = GradientLayout::select(&scene, &settings.params, &settings.grids)?;
-        let adam = Adam::new(layout.entries);
+        let adam = Adam::with_options(layout.entries, settings.adam);
+        let ema = (settings.ema > 0.0).then(|| Ema::new(layout.entries, settings.ema as f64));
+        let mut start_dims = Vec::new();
+        for (block, _) in &layout.grids {
+            if block.kind == BlockKind::Grid {
+                start_dims.push((block.node.clone(), scene.grid_values(&block.node)?.dims));
+            }
+        }
+        let stage_divisors = resolution::divisors(
+            &settings.image_scale,
+            &scene,
+            &views,
+            &settings.grids,
+            settings.upsample_at.len() + 1,
+        )?;
+        let mut reduced_targets: Vec<(u32, Vec<Image>)> = Vec::new();
+        for &d in &stage_divisors {
+            if d > 1 && !reduced_targets.iter().any(|(e, _)| *e == d) {
+                let images = targets.iter().map(|t| resolution::reduce(t, d)).collect();
+                reduced_targets.push((d, images));
+            }
+        }
         Ok(Self {
             scene,
             views,
@@ -175,6 +227,10 @@ impl Optimization {
             settings,
             layout,
             adam,
+            ema,
+            start_dims,
+            stage_divisors,
+            reduced_targets,
             done: 0,
         })
     }
@@ -232,16 +288,16 @@ impl Optimization {
         let mut gradient = vec![0.0f64; self.layout.entries];
         let mut loss = 0.0;
         let mut invalid = 0;
+        let image_loss = self.settings.loss.multiscale(self.settings.loss_scales);
+        let divisor = self.divisor_at(index);
+        let targets = match self.reduced_targets.iter().find(|(d, _)| *d == divisor) {
+            Some((_, reduced)) => reduced,
+            None => &self.targets,
+        };
         for &v in &views {
-            let scene = self.views[v].apply(&self.scene)?;
+            let scene = self.views[v].apply_reduced(&self.scene, divisor)?;
             let options = self.options(index, v);
-            let g = loss_gradient(
-                &scene,
-                &self.layout,
-                &self.targets[v],
-                self.settings.loss,
-                &options,
-            )?;
+            let g = loss_gradient(&scene, &self.layout, &targets[v], image_loss, &options)?;
             loss += g.loss;
             invalid += g.gradient.stats.invalid_derivatives;
             stages.loss_pass += g.loss_seconds;
@@ -267,19 +323,16 @@ impl Optimization {
             }
         }
         let norm = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-        let named = self.layout.params.len();
-        let rates: Vec<f32> = (0..self.layout.entries)
-            .map(|i| {
-                if i < named {
-                    self.settings.learning_rate_params
-                } else {
-                    self.settings.learning_rate_grids
-                }
-            })
-            .collect();
+        let rates = self.rates(index)?;
         let mut values = self.values()?;
         let proposed = self.adam.step(&values, &gradient, &rates);
         self.apply(&mut values, &proposed)?;
+        if self.ema.is_some() {
+            let values = self.values()?;
+            if let Some(ema) = &mut self.ema {
+                ema.push(&values);
+            }
+        }
         self.done += 1;
         Ok(Iteration {
             index,
@@ -289,6 +342,57 @@ impl Optimization {
             invalid_samples: invalid,
             stage_seconds: stages,
         })
+    }
+
+    /// The divisor of the film's width and height at iteration `index` (its grid stage's).
+    pub fn divisor_at(&self, index: u32) -> u32 {
+        let stage = resolution::stage_of(index, &self.settings.upsample_at);
+        self.stage_divisors.get(stage).copied().unwrap_or(1)
+    }
+
+    /// The step size of every entry at iteration `index`: the named parameters' and the grids' rates
+    /// times the decay's and the warm-up's factors, a grid's also times its resolution's scale.
+    fn rates(&self, index: u32) -> Result<Vec<f32>> {
+        let s = &self.settings;
+        let decay = s.learning_rate_decay.factor(index, s.iterations)
+            * schedule::warmup(index, &s.upsample_at, s.learning_rate_warmup);
+        let mut rates = vec![s.learning_rate_params * decay; self.layout.params.len()];
+        for (block, _) in &self.layout.grids {
+            let mut rate = s.learning_rate_grids * decay;
+            if s.learning_rate_resolution
+                && block.kind == BlockKind::Grid
+                && let Some((_, start)) = self.start_dims.iter().find(|(n, _)| *n == block.node)
+            {
+                let dims = self.scene.grid_values(&block.node)?.dims;
+                rate *= schedule::resolution_scale(*start, dims);
+            }
+            rates.extend(std::iter::repeat_n(rate, block.len()));
+        }
+        Ok(rates)
+    }
+
+    /// The scene at the moving average of the values (the run's result, and what its metrics
+    /// measure); the current scene when `ema` is 0 or before the first step. A named parameter whose
+    /// average its field rejects keeps its current value.
+    pub fn averaged_scene(&self) -> Result<Scene> {
+        let Some(values) = self.ema.as_ref().and_then(Ema::value) else {
+            return Ok(self.scene.clone());
+        };
+        let mut scene = self.scene.clone();
+        for (k, name) in self.layout.params.iter().enumerate() {
+            if let Ok(s) = scene.with_parameter(name, values[k]) {
+                scene = s;
+            }
+        }
+        for (block, first) in &self.layout.grids {
+            let values = values[*first..*first + block.len()].to_vec();
+            if block.kind == BlockKind::Grid {
+                scene.set_grid_values(&block.node, values)?;
+            } else {
+                scene.set_block_values(&block.node, values)?;
+            }
+        }
+        Ok(scene)
     }
 
     /// The grid edits due before iteration `index`: refinement (`upsample_at`, which also restarts
@@ -309,6 +413,38 @@ impl Optimization {
         if nodes.is_empty() || !(upsample || redistance) {
             return Ok(());
         }
+        if upsample && let Some(ema) = &mut self.ema {
+            // Refinement is linear: refine the average's grids too (its named parameters and
+            // textures stay as they are, in the same order).
+            let mut refined = Vec::new();
+            let mut result: Result<()> = Ok(());
+            ema.remap(|values| {
+                refined.extend_from_slice(&values[..self.layout.params.len()]);
+                for (block, first) in &self.layout.grids {
+                    let part = values[*first..*first + block.len()].to_vec();
+                    if block.kind != BlockKind::Grid {
+                        refined.extend(part);
+                        continue;
+                    }
+                    let dims = match self.scene.grid_values(&block.node) {
+                        Ok(d) => d.dims,
+                        Err(e) => {
+                            result = Err(e);
+                            return Vec::new();
+                        }
+                    };
+                    match crate::sdf::GridData::new(dims, part, &block.node) {
+                        Ok(g) => refined.extend(g.refined().values),
+                        Err(e) => {
+                            result = Err(e);
+                            return Vec::new();
+                        }
+                    }
+                }
+                refined
+            });
+            result?;
+        }
         for node in &nodes {
             let mut data = (*self.scene.grid_values(node)?).clone();
             if upsample {
@@ -324,7 +460,7 @@ impl Optimization {
         if upsample {
             self.layout =
                 GradientLayout::select(&self.scene, &self.settings.params, &self.settings.grids)?;
-            self.adam = Adam::new(self.layout.entries);
+            self.adam = Adam::with_options(self.layout.entries, self.settings.adam);
         }
         Ok(())
     }

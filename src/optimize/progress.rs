@@ -2,7 +2,8 @@
 //!
 //! - `iteration`: the 0-based index;
 //! - `loss`: the mean loss over the iteration's views, before its step;
-//! - `seconds`: wall time since the first iteration started;
+//! - `seconds`: wall time since the first iteration started, less the time spent measuring the shapes
+//!   (the columns below) and writing snapshots: seconds of optimisation;
 //! - `gradient_norm`: the Euclidean norm of the mean gradient;
 //! - `iou`, `chamfer`: how close an optimised grid's shape is to the target scene's shape of the same
 //!   name ([`super::metrics::shape_quality`]); named `iou.SHAPE`, `chamfer.SHAPE` when several shapes
@@ -25,7 +26,8 @@ pub struct Row {
     pub iteration: u32,
     /// Mean loss over the iteration's views (before the step).
     pub loss: f64,
-    /// Wall-clock seconds since the first iteration started, at the end of this one.
+    /// Wall-clock seconds since the first iteration started, at the end of this one, less the time
+    /// spent measuring shapes and writing snapshots before it.
     pub seconds: f64,
     /// Euclidean norm of the mean gradient.
     pub gradient_norm: f64,

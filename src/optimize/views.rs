@@ -30,7 +30,15 @@ impl View {
     /// `scene` seen from this view (its camera's film, filter and selection kept). Errors: an invalid
     /// camera (e.g. `up` parallel to the view direction, a field of view outside `(0, 180)`).
     pub fn apply(&self, scene: &Scene) -> Result<Scene> {
+        self.apply_reduced(scene, 1)
+    }
+
+    /// [`View::apply`] with the film's width and height divided by `divisor` (the same field of
+    /// view; `divisor` must divide both).
+    pub fn apply_reduced(&self, scene: &Scene, divisor: u32) -> Result<Scene> {
         let mut camera = scene.camera.clone();
+        camera.width /= divisor;
+        camera.height /= divisor;
         for (p, v) in [
             (&mut camera.origin, self.origin),
             (&mut camera.target, self.target),

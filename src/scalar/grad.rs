@@ -180,6 +180,7 @@ assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign
 // `recip` and `sqr` keep the trait defaults (`1 / x` and `x · x` through the quotient and product rules):
 // the rule-table versions round differently in `S`.
 impl<S: Scalar> Scalar for Grad<S> {
+    const POINT: bool = S::POINT;
     #[inline(always)]
     fn constant(v: f32) -> Self {
         Self {

@@ -61,6 +61,10 @@ pub trait Scalar:
     + MulAssign
     + DivAssign
 {
+    /// Whether this is a point type (one value and its derivatives), whose `min`/`max` pick one
+    /// argument by primal value; `false` for the interval types, which take hulls. Code that skips work
+    /// by comparing primal values (the CSG culling) does so for point types only.
+    const POINT: bool = true;
     /// A constant (all derivatives zero).
     fn constant(v: f32) -> Self;
     /// The value without derivatives.

@@ -560,7 +560,7 @@ mod tests {
         assert!(scene.unsampled_creases().is_empty());
         scene.shapes.push(Shape::new(
             "lens",
-            Sdf::Intersection(vec![
+            Sdf::intersection(vec![
                 Sdf::sphere([0.0, 3.0, 0.0], 1.0),
                 Sdf::sphere([0.5, 3.0, 0.0], 1.0),
             ]),
@@ -581,7 +581,7 @@ mod tests {
         assert!((length / exact - 1.0).abs() < 1e-3, "{length} vs {exact}");
         scene.shapes.push(Shape::new(
             "wedge",
-            Sdf::Intersection(vec![
+            Sdf::intersection(vec![
                 Sdf::Plane {
                     normal: glam::Vec3::Y,
                     offset: 0.0.into(),
@@ -612,7 +612,7 @@ mod tests {
         let across = region.max.z - region.min.z;
         assert!((length / across - 1.0).abs() < 0.05, "{length} of {across}");
         // Cut by a ball, the same crease needs no region: the ball's box holds it.
-        let cut = Sdf::Intersection(vec![
+        let cut = Sdf::intersection(vec![
             Sdf::Plane {
                 normal: glam::Vec3::Y,
                 offset: 0.0.into(),
@@ -638,7 +638,7 @@ mod tests {
             major_radius: 1.0.into(),
             minor_radius: 0.25.into(),
         };
-        let lens = Sdf::Intersection(vec![
+        let lens = Sdf::intersection(vec![
             Sdf::sphere([0.0; 3], 1.0),
             Sdf::transform(
                 Sdf::sphere([0.0; 3], 1.0),
@@ -648,7 +648,7 @@ mod tests {
                 2.0,
             ),
         ]);
-        let pair = Sdf::Union(vec![
+        let pair = Sdf::union(vec![
             Sdf::sphere([0.0; 3], 1.0),
             Sdf::sphere([3.0, 0.0, 0.0], 1.0),
         ]);

@@ -444,10 +444,10 @@ fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
 fn push_crossings(node: &Sdf, walk: &Walk, out: &mut Found) {
     // Locally the solid is {F_a < 0 and F_b < 0} (convex) or, inverted, its complement.
     let (children, negate, inverted): (&[Sdf], fn(usize) -> bool, bool) = match node {
-        Sdf::Intersection(c) => (c, |_| false, false),
-        Sdf::Difference(c) => (c, |i| i > 0, false),
-        Sdf::Union(c) => (c, |_| true, true),
-        Sdf::SmoothUnion { children, k } if k.value <= 0.0 => (children, |_| true, true),
+        Sdf::Intersection(c) => (c.as_slice(), |_| false, false),
+        Sdf::Difference(c) => (c.as_slice(), |i| i > 0, false),
+        Sdf::Union(c) => (c.as_slice(), |_| true, true),
+        Sdf::SmoothUnion { children, k } if k.value <= 0.0 => (children.as_slice(), |_| true, true),
         _ => return,
     };
     for (i, j, common) in crossing_pairs(children) {
@@ -519,7 +519,7 @@ mod tests {
                 1.7 * 4.0 * 2.0 * (0.5 + 0.7 + 0.9),
             ),
             (
-                transformed(Sdf::Union(vec![
+                transformed(Sdf::union(vec![
                     Sdf::sphere([5.0, 0.0, 0.0], 0.5),
                     cylinder,
                 ])),
@@ -561,7 +561,7 @@ mod tests {
                 .filter(|e| !matches!(e.faces[0], Face::Child { .. }))
                 .collect()
         };
-        let notch = Sdf::Difference(vec![ball.clone(), sharp_box()]);
+        let notch = Sdf::difference(vec![ball.clone(), sharp_box()]);
         let edges = box_edges(&notch);
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|e| e.inverted && e.path == [1]));
@@ -582,7 +582,7 @@ mod tests {
                 }
             ]
         );
-        let twice = Sdf::Difference(vec![ball.clone(), notch]);
+        let twice = Sdf::difference(vec![ball.clone(), notch]);
         assert!(
             box_edges(&twice)
                 .iter()
@@ -591,14 +591,14 @@ mod tests {
         // The notch's own crossing, inside the subtracted child, is concave.
         let inner = twice.crossing_creases();
         assert!(inner.iter().any(|c| c.path == [1] && c.inverted));
-        let kept = Sdf::Difference(vec![sharp_box(), ball.clone()]);
+        let kept = Sdf::difference(vec![sharp_box(), ball.clone()]);
         assert!(
             box_edges(&kept)
                 .iter()
                 .all(|e| !e.inverted && e.path == [0])
         );
         // A hard union's crossing is concave, with both children negated.
-        let union = Sdf::Union(vec![ball, sharp_box()]);
+        let union = Sdf::union(vec![ball, sharp_box()]);
         let c = union.crossing_creases();
         assert_eq!(c.len(), 1);
         assert!(c[0].inverted);

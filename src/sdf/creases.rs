@@ -212,15 +212,15 @@ mod tests {
             Sdf::sphere([1.5, 0.0, 0.0], 1.0),
         );
         let far = Sdf::sphere([5.0, 0.0, 0.0], 1.0);
-        let crossing = Sdf::Union(vec![a.clone(), b.clone()]).creases().unwrap();
+        let crossing = Sdf::union(vec![a.clone(), b.clone()]).creases().unwrap();
         assert!(crossing.contains("hard union"), "{crossing}");
-        assert_eq!(Sdf::Union(vec![a.clone(), far.clone()]).creases(), None);
+        assert_eq!(Sdf::union(vec![a.clone(), far.clone()]).creases(), None);
         // Boxes overlap but the surfaces do not cross: a small sphere deep inside a big one.
         let inner = Sdf::sphere([0.1, 0.0, 0.0], 0.3);
-        assert_eq!(Sdf::Union(vec![a.clone(), inner.clone()]).creases(), None);
-        assert_eq!(Sdf::Intersection(vec![a.clone(), inner]).creases(), None);
+        assert_eq!(Sdf::union(vec![a.clone(), inner.clone()]).creases(), None);
+        assert_eq!(Sdf::intersection(vec![a.clone(), inner]).creases(), None);
         assert!(
-            Sdf::Difference(vec![a.clone(), b.clone()])
+            Sdf::difference(vec![a.clone(), b.clone()])
                 .creases()
                 .unwrap()
                 .contains("hard difference")
@@ -230,12 +230,12 @@ mod tests {
             normal: glam::Vec3::Y,
             offset: (-1.2f32).into(),
         };
-        assert_eq!(Sdf::Union(vec![a.clone(), floor.clone()]).creases(), None);
+        assert_eq!(Sdf::union(vec![a.clone(), floor.clone()]).creases(), None);
         let sunk = Sdf::Plane {
             normal: glam::Vec3::Y,
             offset: (-0.5f32).into(),
         };
-        assert!(Sdf::Union(vec![a.clone(), sunk]).creases().is_some());
+        assert!(Sdf::union(vec![a.clone(), sunk]).creases().is_some());
         // k = 0 smooth union is a hard union; k > 0 has no crease of its own.
         assert!(
             Sdf::smooth_union(vec![a.clone(), b.clone()], 0.0)
@@ -265,7 +265,7 @@ mod tests {
             .unwrap();
         assert_eq!(s, "lid: sharp box (rounding 0)");
         // Several reasons, each once.
-        let two = Sdf::Union(vec![
+        let two = Sdf::union(vec![
             sharp_box([0.0; 3], 1.0),
             sharp_box([1.5, 0.0, 0.0], 1.0),
             sharp_box([9.0, 0.0, 0.0], 1.0),

@@ -170,7 +170,7 @@ mod tests {
     fn a_lens_creases_along_a_circle() {
         let d = 1.2f32;
         let lens = Sdf::transform(
-            Sdf::Intersection(vec![
+            Sdf::intersection(vec![
                 Sdf::sphere([0.0; 3], 1.0),
                 Sdf::sphere([d, 0.0, 0.0], 1.0),
             ]),

@@ -229,7 +229,7 @@ pub(super) mod kinds {
     pub(in crate::sdf) const UNION: Kind<Sdf> = Kind {
         type_name: "union",
         fields: &[children(on!(Sdf::Union(c) => c))],
-        blank: || Sdf::Union(Vec::new()),
+        blank: || Sdf::union(Vec::new()),
         example: concat!(r#"{"type": "union", "children": "#, two_spheres!(), "}"),
     };
 
@@ -237,7 +237,7 @@ pub(super) mod kinds {
     pub(in crate::sdf) const INTERSECTION: Kind<Sdf> = Kind {
         type_name: "intersection",
         fields: &[children(on!(Sdf::Intersection(c) => c))],
-        blank: || Sdf::Intersection(Vec::new()),
+        blank: || Sdf::intersection(Vec::new()),
         example: concat!(
             r#"{"type": "intersection", "children": "#,
             two_spheres!(),
@@ -249,7 +249,7 @@ pub(super) mod kinds {
     pub(in crate::sdf) const DIFFERENCE: Kind<Sdf> = Kind {
         type_name: "difference",
         fields: &[children(on!(Sdf::Difference(c) => c))],
-        blank: || Sdf::Difference(Vec::new()),
+        blank: || Sdf::difference(Vec::new()),
         example: concat!(
             r#"{"type": "difference", "children": "#,
             two_spheres!(),

@@ -438,6 +438,25 @@ pub(super) fn faces_min(data: &GridData) -> f32 {
     m
 }
 
+/// Culling box of a grid node ([`Sdf::cull_bounds`]): the grid box, grown by how far the face values go
+/// below `level`. Outside it `φ = φ(face) + dist(p, grid box) ≥ dist(p, grid box) − (level − m)`, which
+/// is at least the distance to the grown box (a box grown by `g` per axis holds the `g`-neighbourhood);
+/// the tighter [`bounds`] of the straddling cells has no such property (inside the grid box the spline
+/// is no distance).
+pub(super) fn cull_bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
+    if !data.usable() {
+        return Aabb::EMPTY;
+    }
+    let m = faces_min(data);
+    let b = Aabb::new(bmin, bmax);
+    let pad = 1e-6 * b.extent().max_element();
+    if m < level {
+        b.expanded(level - m + pad)
+    } else {
+        b
+    }
+}
+
 /// Box of a grid node of iso-level `level`. Where the spline gets below `level` on the grid box's faces,
 /// the grid box grown by how far below (outside, `φ = φ(face) + distance`, so a face value `level − m`
 /// puts zeros up to `m` beyond the face). Otherwise every zero lies in a cell whose 4×4×4 control

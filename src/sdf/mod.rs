@@ -32,6 +32,7 @@ mod crease_edges;
 mod creases;
 mod crossing_creases;
 mod csg;
+mod culling;
 mod empty_space;
 mod grid;
 mod grid_edit;
@@ -47,6 +48,7 @@ pub use bake::{BAKE_PADDING, Baked, bake, bake_dims, bake_padded, bake_padded_by
 pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
 pub use crossing_creases::CrossingCrease;
+pub use culling::{CULL_MIN_CHILDREN, Children};
 pub use empty_space::{Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use primitive::SdfPrimitive;
@@ -146,16 +148,16 @@ pub enum Sdf {
         offset: Param,
     },
     /// Union (minimum) of the children.
-    Union(Vec<Sdf>),
+    Union(Children),
     /// Intersection (maximum) of the children.
-    Intersection(Vec<Sdf>),
+    Intersection(Children),
     /// The first child minus all others.
-    Difference(Vec<Sdf>),
+    Difference(Children),
     /// Smooth union with blending radius `k`: the cubic polynomial smooth minimum (C2, at most `k/6` below
     /// the minimum, equal to it where the children differ by more than `k`), folded over the children.
     SmoothUnion {
         /// Children (at least one).
-        children: Vec<Sdf>,
+        children: Children,
         /// Blending radius, in scene units.
         k: Param,
     },
@@ -313,9 +315,16 @@ impl Sdf {
             } => primitives::cylinder::<S, FACES>(p, center, *axis, radius, half_height, rounding),
             Sdf::Primitive(primitive) => primitive.eval(p),
             Sdf::Plane { normal, offset } => primitives::plane(p, *normal, offset),
-            Sdf::Union(children) => csg::union::<S, FACES>(children, p),
+            Sdf::Union(children) => match culling::hierarchy::<S>(children).filter(|_| !FACES) {
+                Some(bvh) => culling::union::<S, FACES>(children, bvh, p),
+                None => csg::union::<S, FACES>(children, p),
+            },
             Sdf::Intersection(children) => csg::intersection::<S, FACES>(children, p),
-            Sdf::Difference(children) => csg::difference::<S, FACES>(children, p),
+            Sdf::Difference(children) => match culling::hierarchy::<S>(children).filter(|_| !FACES)
+            {
+                Some(bvh) => culling::difference::<S, FACES>(children, bvh, p),
+                None => csg::difference::<S, FACES>(children, p),
+            },
             Sdf::SmoothUnion { children, k } => {
                 csg::smooth_union::<S, FACES>(children, k.get::<S>(), p)
             }
@@ -698,10 +707,22 @@ impl Sdf {
             offset: offset.into(),
         }
     }
+    /// A hard union (the minimum of the children), with its culling hierarchy.
+    pub fn union(children: Vec<Sdf>) -> Self {
+        Sdf::Union(children.into())
+    }
+    /// A hard intersection (the maximum of the children).
+    pub fn intersection(children: Vec<Sdf>) -> Self {
+        Sdf::Intersection(children.into())
+    }
+    /// The first child minus the others, with its culling hierarchy.
+    pub fn difference(children: Vec<Sdf>) -> Self {
+        Sdf::Difference(children.into())
+    }
     /// A smooth union with blending radius `k`.
     pub fn smooth_union(children: Vec<Sdf>, k: impl Into<Param>) -> Self {
         Sdf::SmoothUnion {
-            children,
+            children: children.into(),
             k: k.into(),
         }
     }
@@ -724,10 +745,11 @@ impl Sdf {
             child: Box::new(child),
         }
     }
-    /// This node with the values it keeps for speed ([`AngleTrig`]) recomputed from its parameters,
-    /// after they were set in place.
+    /// This node with the values it keeps for speed ([`AngleTrig`], the CSG nodes' culling hierarchies
+    /// over their children's boxes) recomputed from its parameters, after they were set in place.
     pub fn refreshed(mut self) -> Self {
         transform::refresh_trig(&mut self);
+        culling::refresh(&mut self);
         self
     }
 

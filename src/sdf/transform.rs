@@ -496,7 +496,7 @@ pub(super) mod kinds {
             },
         ],
         blank: || {
-            let placeholder = Sdf::Union(Vec::new());
+            let placeholder = Sdf::union(Vec::new());
             Sdf::transform(placeholder, glam::Vec3::ZERO, glam::Vec3::Y, 0.0, 1.0)
         },
         example: r#"{"type": "transform", "translate": [0.1, 0.2, 0], "rotate": {"axis": [0, 0, 1], "angle": 30},

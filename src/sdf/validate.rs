@@ -78,7 +78,7 @@ mod tests {
             center: Param3::from(glam::Vec3::ZERO),
             radius: Param::new(-1.0),
         };
-        let union = Sdf::Union(vec![bad.clone()]);
+        let union = Sdf::union(vec![bad.clone()]);
         assert!(union.validate(FieldPath::Json("s")).is_empty());
         assert_eq!(bad.validate(FieldPath::Json("s")).len(), 1);
     }

@@ -129,6 +129,7 @@ impl Div for IntervalGrad {
 scalar_ops!(IntervalGrad);
 
 impl Scalar for IntervalGrad {
+    const POINT: bool = false;
     /// Always the dedicated enclosure (see [`Enclose`]).
     #[inline]
     fn enclosure<F: Enclose<N>, const N: usize>(formula: &F, args: [Self; N]) -> Option<Self> {

@@ -388,6 +388,7 @@ mod gradient;
 pub use gradient::IntervalGrad;
 
 impl Scalar for Interval {
+    const POINT: bool = false;
     /// Always the dedicated enclosure (see [`Enclose`]).
     #[inline]
     fn enclosure<F: Enclose<N>, const N: usize>(formula: &F, args: [Self; N]) -> Option<Self> {
