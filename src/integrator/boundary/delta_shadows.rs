@@ -98,7 +98,7 @@
 use super::motion::Motion;
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::subpath_sampler;
-use super::source::{BoundarySource, Pass, Scratch};
+use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch};
 use super::subpaths::camera_side;
 use super::{finite_splat, splat_on_film};
 use crate::emitter::Emitter;
@@ -173,6 +173,26 @@ impl DeltaShadows {
     /// Whether the scene has a delta light with an occluder's silhouette in its view.
     pub fn is_empty(&self) -> bool {
         self.curves.is_empty()
+    }
+
+    /// The `(light, shape)` index pairs whose silhouettes are held, in sampling order.
+    pub fn pairs(&self) -> Vec<(usize, usize)> {
+        self.curves.iter().map(|(e, m, _)| (*e, *m)).collect()
+    }
+
+    /// The silhouettes of the pairs `(light, shape)` with `keep(light, shape)` only.
+    pub fn only(&self, keep: impl Fn(usize, usize) -> bool) -> Self {
+        let curves = (self.curves.iter())
+            .filter(|(e, m, _)| keep(*e, *m))
+            .cloned()
+            .collect();
+        Self { curves }
+    }
+}
+
+impl BoundaryTerm for DeltaShadows {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![self]
     }
 }
 

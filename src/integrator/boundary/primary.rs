@@ -214,29 +214,6 @@ pub(crate) fn primary_terms(
     })
 }
 
-/// The radiance part of eq. (2) (`fixed` normalisation) estimated from `curves` alone with all
-/// `samples`, for the parameters of `selection`: checks of which silhouettes [`Silhouettes::of`] may
-/// leave out (the curves of the others must give exactly zero). Errors as [`render_primary`].
-pub fn render_silhouettes(
-    scene: &Scene,
-    selection: &Selection,
-    options: &DiffOptions,
-    samples: u64,
-    curves: &Silhouettes,
-) -> Result<Vec<Image>> {
-    require_continuous_filter(scene, "the primary boundary term")?;
-    let (selected, count) = (selection.apply(scene)?, selection.len());
-    if count == 0 || curves.0.is_empty() {
-        let (w, h) = (scene.camera.width, scene.camera.height);
-        return Ok(vec![Image::new(w, h); count]);
-    }
-    let (radiance, _, _) = dispatch_directions!(
-        count,
-        term_images(&selected, count, options, samples, curves, false)
-    );
-    Ok(radiance)
-}
-
 /// Everything the primary term samples, found once per render: shape silhouettes, emitter outlines and
 /// crease edges in view, which share its samples equally (those with nothing in view take no share).
 #[derive(Clone, Debug)]
