@@ -219,7 +219,7 @@ fn cones_meet(y: glam::Vec3, a: &Aabb, b: &Aabb) -> bool {
         }
         let (c, r) = (b.center(), 0.5 * b.extent().length());
         let d = (c - y).length();
-        if !(d > r) {
+        if d.is_nan() || d <= r {
             return None;
         }
         Some(((c - y) / d, (r / d).asin()))
