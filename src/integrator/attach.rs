@@ -92,7 +92,7 @@ pub fn for_each_window<T>(
 }
 
 /// Whether the geometry of a shape (SDF or translation, not the material) has a selected parameter.
-fn geometry_selected(shape: &Shape) -> bool {
+pub(crate) fn geometry_selected(shape: &Shape) -> bool {
     let mut any = shape.translate.c.iter().any(|p| p.slot.is_some());
     shape
         .sdf

@@ -95,9 +95,10 @@
 //! shadow-casting curve, the direction across the light's ray towards its clear side and the rate of
 //! the occluder's residual there are all it needs.
 
+use super::motion::Motion;
 use super::segment::is_silhouette_direction;
 use super::shadow_segment::subpath_sampler;
-use super::source::{BoundarySource, Pass, Scratch};
+use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch};
 use super::subpaths::camera_side;
 use super::{finite_splat, splat_on_film};
 use crate::emitter::Emitter;
@@ -127,8 +128,22 @@ pub struct DeltaShadows {
 
 impl DeltaShadows {
     /// The silhouettes of `scene`'s curved shapes with finite bounds seen from its delta lights (none
-    /// without delta lights).
+    /// without delta lights), `scene` with its selection applied, for the pairs whose term can be
+    /// non-zero ([`super::motion::Motion::delta_shadow_keeps`]): the others add exactly nothing, and
+    /// are neither extracted nor sampled.
     pub fn of(scene: &Scene) -> Self {
+        let motion = Motion::of(scene);
+        Self::extract(scene, |e, m| motion.delta_shadow_keeps(scene, e, m))
+    }
+
+    /// The silhouettes seen from the delta lights of every curved shape with finite bounds, whatever
+    /// the selected parameters move (what [`DeltaShadows::of`] prunes from).
+    pub fn unpruned(scene: &Scene) -> Self {
+        Self::extract(scene, |_, _| true)
+    }
+
+    /// The silhouettes of the pairs `(light e, shape m)` with `keep(e, m)`.
+    fn extract(scene: &Scene, keep: impl Fn(usize, usize) -> bool) -> Self {
         let mut curves = Vec::new();
         for (e, light) in scene.emitters.iter().enumerate() {
             let view = match &light.emitter {
@@ -141,7 +156,7 @@ impl DeltaShadows {
             };
             for (i, shape) in scene.shapes.iter().enumerate() {
                 let b = shape.bounds;
-                if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() {
+                if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() || !keep(e, i) {
                     continue;
                 }
                 // Extraction fails only for unbounded shapes, excluded above.
@@ -158,6 +173,26 @@ impl DeltaShadows {
     /// Whether the scene has a delta light with an occluder's silhouette in its view.
     pub fn is_empty(&self) -> bool {
         self.curves.is_empty()
+    }
+
+    /// The `(light, shape)` index pairs whose silhouettes are held, in sampling order.
+    pub fn pairs(&self) -> Vec<(usize, usize)> {
+        self.curves.iter().map(|(e, m, _)| (*e, *m)).collect()
+    }
+
+    /// The silhouettes of the pairs `(light, shape)` with `keep(light, shape)` only.
+    pub fn only(&self, keep: impl Fn(usize, usize) -> bool) -> Self {
+        let curves = (self.curves.iter())
+            .filter(|(e, m, _)| keep(*e, *m))
+            .cloned()
+            .collect();
+        Self { curves }
+    }
+}
+
+impl BoundaryTerm for DeltaShadows {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![self]
     }
 }
 

@@ -24,6 +24,7 @@ pub mod delta_creases;
 pub mod delta_shadows;
 pub mod emitter_edges;
 mod frustum;
+pub mod motion;
 pub mod primary;
 pub mod secondary;
 pub mod segment;

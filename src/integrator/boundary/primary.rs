@@ -35,7 +35,9 @@
 //!
 //! `x_B` is sampled on the extracted 3D silhouette curve ([`SilhouetteCurve::sample`]) with density
 //! `p` per unit length `dℓ` of the true curve, after choosing one of the `K` shapes with a non-empty curve
-//! uniformly. Its image is `u_B = P(x_B)` (`P` = [`crate::camera::CameraFrame::project`]); with `T` the
+//! uniformly. Only the shapes whose term can be non-zero are among the `K` ([`super::motion`]): with
+//! the camera fixed, a fixed shape's `v` is exactly zero unless a moving shape or emitter can be seen
+//! next to it. Its image is `u_B = P(x_B)` (`P` = [`crate::camera::CameraFrame::project`]); with `T` the
 //! unit curve tangent and `P'` the 2×3 Jacobian of the projection,
 //!
 //! ```text
@@ -104,6 +106,7 @@
 
 use super::crease_edges::{CreaseEdges, CreasesInView};
 use super::emitter_edges::EmitterOutlines;
+use super::motion::Motion;
 use super::segment::is_silhouette_direction;
 use super::source::{BoundarySource, BoundaryTerm, Pass, Scratch, term_images};
 use super::{
@@ -240,20 +243,34 @@ impl BoundaryTerm for PrimarySources {
     }
 }
 
-/// The silhouette curves seen from the camera centre of every shape with finite bounds and curved
-/// surfaces ([`crate::sdf::Sdf::is_piecewise_flat`]; non-empty curves only), per shape index: eq. (2)'s
-/// samples.
+/// The silhouette curves seen from the camera centre of the shapes with finite bounds and curved
+/// surfaces ([`crate::sdf::Sdf::is_piecewise_flat`]; non-empty curves only) whose primary term can be
+/// non-zero with the selected parameters ([`super::motion`]), per shape index: eq. (2)'s samples.
 #[derive(Clone, Debug, Default)]
 pub struct Silhouettes(pub Vec<(usize, SilhouetteCurve)>);
 
 impl Silhouettes {
-    /// The silhouettes of `scene`'s shapes seen from its camera. Errors: a failed extraction.
+    /// The silhouettes seen from the camera of `scene`'s shapes (its selection applied) whose term can
+    /// be non-zero ([`super::motion::Motion::primary_keeps`]): the others add exactly nothing, and are
+    /// neither extracted nor sampled. Errors: a failed extraction.
     pub fn of(scene: &Scene) -> Result<Self> {
+        let motion = Motion::of(scene);
+        Self::extract(scene, |m| motion.primary_keeps(scene, m))
+    }
+
+    /// The silhouettes seen from the camera of every shape of `scene` with finite bounds and curved
+    /// surfaces, whatever the selected parameters move (what [`Silhouettes::of`] prunes from).
+    pub fn unpruned(scene: &Scene) -> Result<Self> {
+        Self::extract(scene, |_| true)
+    }
+
+    /// The silhouettes of the curved, bounded shapes `m` with `keep(m)`.
+    fn extract(scene: &Scene, keep: impl Fn(usize) -> bool) -> Result<Self> {
         let eye: glam::Vec3 = scene.camera.frame::<f32>().origin.into();
         let mut curves = Vec::new();
         for (i, shape) in scene.shapes.iter().enumerate() {
             let b = shape.bounds;
-            if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() {
+            if !b.is_finite() || b.is_empty() || shape.sdf.is_piecewise_flat() || !keep(i) {
                 continue;
             }
             let curve = extract_silhouette(shape, eye, &CurveOptions::default())?;
@@ -262,6 +279,12 @@ impl Silhouettes {
             }
         }
         Ok(Self(curves))
+    }
+}
+
+impl BoundaryTerm for Silhouettes {
+    fn sources<S: Directions>(&self) -> Vec<&dyn BoundarySource<S>> {
+        vec![self]
     }
 }
 

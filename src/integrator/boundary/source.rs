@@ -200,3 +200,24 @@ fn split_equally<K: Copy>(samples: u64, kinds: &[(K, bool)]) -> Vec<(K, u64)> {
         .filter(|&(_, k)| k > 0)
         .collect()
 }
+
+/// The radiance images (`fixed` normalisation) of `term`'s samples alone, `samples` for the whole
+/// image, for the parameters of `selection`: a check of what [`super::motion`] leaves out (the curves
+/// it leaves out must give exactly zero). Errors: those of [`crate::scene::Selection::apply`].
+pub fn render_term(
+    scene: &Scene,
+    selection: &crate::scene::Selection,
+    options: &DiffOptions,
+    samples: u64,
+    term: &impl BoundaryTerm,
+) -> crate::error::Result<Vec<Image>> {
+    let (selected, count) = (selection.apply(scene)?, selection.len());
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    let (radiance, _, _) = crate::scalar::dispatch_directions!(
+        count,
+        term_images(&selected, count, options, samples, term, false)
+    );
+    Ok(radiance)
+}
