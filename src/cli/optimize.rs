@@ -36,9 +36,8 @@ pub(crate) fn optimize(args: &OptimizeArgs) -> Result<()> {
         what.push(count(settings.params.len(), "parameter"));
     }
     // optimize.grids names value blocks of three kinds; the summary names each kind.
-    let kinds: Vec<_> = (cfg.scene.blocks().into_iter())
-        .filter(|b| settings.grids.contains(&b.node))
-        .map(|b| b.kind)
+    let kinds: Vec<_> = (settings.grids.iter())
+        .filter_map(|node| cfg.scene.block_kind(node))
         .collect();
     for (kind, noun) in [
         (crate::scene::BlockKind::Grid, "grid"),
@@ -77,9 +76,7 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
         }
     }
     for node in &cfg.settings.grids {
-        let kind = (cfg.scene.blocks().into_iter())
-            .find(|b| b.node == *node)
-            .map(|b| b.kind);
+        let kind = cfg.scene.block_kind(node);
         let (what, mesh) = if cfg.scene.texture_range(node).is_some() {
             let what = match kind {
                 Some(crate::scene::BlockKind::Envmap) => "every texel of the environment map",

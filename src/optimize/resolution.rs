@@ -120,9 +120,8 @@ pub(crate) fn parse(
 /// `grids` include an SDF grid and no texture or environment map (whose texels the film must
 /// resolve), else [`ImageScale::Full`].
 pub fn default_scale(scene: &Scene, grids: &[String]) -> ImageScale {
-    let kinds: Vec<BlockKind> = (scene.blocks().into_iter())
-        .filter(|b| grids.contains(&b.node))
-        .map(|b| b.kind)
+    let kinds: Vec<BlockKind> = (grids.iter())
+        .filter_map(|node| scene.block_kind(node))
         .collect();
     if kinds.contains(&BlockKind::Grid) && kinds.iter().all(|&k| k == BlockKind::Grid) {
         ImageScale::Auto

@@ -359,7 +359,7 @@ fn write_finals(
 /// The output file of optimised block `node`: `NODE.exr` for an environment map (the format its
 /// `file` reads), `NODE.npy` otherwise.
 pub(crate) fn block_file(scene: &Scene, node: &str) -> String {
-    let envmap = (scene.blocks().iter()).any(|b| b.node == node && b.kind == BlockKind::Envmap);
+    let envmap = scene.block_kind(node) == Some(BlockKind::Envmap);
     format!("{node}.{}", if envmap { "exr" } else { "npy" })
 }
 

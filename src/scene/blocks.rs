@@ -222,6 +222,14 @@ impl Scene {
         })
     }
 
+    /// The kind of the block whose node is `node` (a grid node, a texture or an environment map
+    /// emitter), if there is one.
+    pub fn block_kind(&self, node: &str) -> Option<BlockKind> {
+        (self.blocks().into_iter())
+            .find(|b| b.node == node)
+            .map(|b| b.kind)
+    }
+
     /// Every grid node's values as a block, in the order of [`Scene::parameters`] (the blocks of
     /// kind [`BlockKind::Grid`]).
     pub fn grid_blocks(&self) -> Vec<ParamBlock> {
