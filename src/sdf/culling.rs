@@ -322,28 +322,7 @@ pub(super) fn union<S: Scalar, const FACES: bool>(
     bvh: &ChildBvh,
     p: Vec3<S>,
 ) -> S {
-    let mut best = children[0].eval_as::<S, FACES>(p);
-    if best.primal().is_nan() {
-        // The fold keeps a NaN first value.
-        return best;
-    }
-    let mut best_index = 0;
-    let q = primal(p);
-    let best_cell = std::cell::Cell::new(best.primal());
-    bvh.visit(
-        q,
-        |bound| bound.partial_cmp(&best_cell.get()) != Some(std::cmp::Ordering::Greater),
-        |i| {
-            let v = children[i].eval_as::<S, FACES>(p);
-            let (vp, bp) = (v.primal(), best.primal());
-            if vp < bp || (vp == bp && i < best_index) {
-                best = v;
-                best_index = i;
-                best_cell.set(vp);
-            }
-        },
-    );
-    best
+    culled_fold::<S, FACES, false>(children, bvh, p)
 }
 
 /// A difference over a hierarchy of its subtracted children: the plain fold's result (the first term
@@ -354,23 +333,39 @@ pub(super) fn difference<S: Scalar, const FACES: bool>(
     bvh: &ChildBvh,
     p: Vec3<S>,
 ) -> S {
+    culled_fold::<S, FACES, true>(children, bvh, p)
+}
+
+/// The minimum of `φ_0, φ_1, …` (`SUBTRACT` false) or the maximum of `φ_0, −φ_1, …` (true), the
+/// first term reaching it on ties, visiting only the children whose box may hold a better value. Both
+/// compare keys that are minimised: the term, or its negation for the maximum (exact in floats), so
+/// that a child's box lower bound `b` may improve on the best key `k` only if `b ≤ k`.
+#[inline(always)]
+fn culled_fold<S: Scalar, const FACES: bool, const SUBTRACT: bool>(
+    children: &[Sdf],
+    bvh: &ChildBvh,
+    p: Vec3<S>,
+) -> S {
     let mut best = children[0].eval_as::<S, FACES>(p);
     if best.primal().is_nan() {
+        // The fold keeps a NaN first value.
         return best;
     }
+    let key = |v: f32| if SUBTRACT { -v } else { v };
     let mut best_index = 0;
     let q = primal(p);
-    let best_cell = std::cell::Cell::new(best.primal());
+    let best_key = std::cell::Cell::new(key(best.primal()));
     bvh.visit(
         q,
-        |bound| (-bound).partial_cmp(&best_cell.get()) != Some(std::cmp::Ordering::Less),
+        |bound| bound.partial_cmp(&best_key.get()) != Some(std::cmp::Ordering::Greater),
         |i| {
-            let v = -children[i].eval_as::<S, FACES>(p);
-            let (vp, bp) = (v.primal(), best.primal());
-            if vp > bp || (vp == bp && i < best_index) {
+            let child = children[i].eval_as::<S, FACES>(p);
+            let v = if SUBTRACT { -child } else { child };
+            let (vk, bk) = (key(v.primal()), key(best.primal()));
+            if vk < bk || (vk == bk && i < best_index) {
                 best = v;
                 best_index = i;
-                best_cell.set(vp);
+                best_key.set(vk);
             }
         },
     );

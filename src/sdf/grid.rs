@@ -444,17 +444,28 @@ pub(super) fn faces_min(data: &GridData) -> f32 {
 /// the tighter [`bounds`] of the straddling cells has no such property (inside the grid box the spline
 /// is no distance).
 pub(super) fn cull_bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
+    face_grown_box(data, bmin, bmax, level).map_or(Aabb::EMPTY, |(b, _)| b)
+}
+
+/// The grid box grown by how far the face values go below `level`, and whether it was grown (`None`
+/// for an unusable grid).
+fn face_grown_box(
+    data: &GridData,
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+    level: f32,
+) -> Option<(Aabb, bool)> {
     if !data.usable() {
-        return Aabb::EMPTY;
+        return None;
     }
     let m = faces_min(data);
     let b = Aabb::new(bmin, bmax);
     let pad = 1e-6 * b.extent().max_element();
-    if m < level {
-        b.expanded(level - m + pad)
+    Some(if m < level {
+        (b.expanded(level - m + pad), true)
     } else {
-        b
-    }
+        (b, false)
+    })
 }
 
 /// Box of a grid node of iso-level `level`. Where the spline gets below `level` on the grid box's faces,
@@ -464,15 +475,13 @@ pub(super) fn cull_bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, l
 /// cells, often far smaller than the grid box (a baked shape is sampled over padded bounds), so rays
 /// that pass beside the surface skip the shape.
 pub(super) fn bounds(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, level: f32) -> Aabb {
-    if !data.usable() {
+    let Some((b, grown)) = face_grown_box(data, bmin, bmax, level) else {
         return Aabb::EMPTY;
+    };
+    if grown {
+        return b;
     }
-    let m = faces_min(data);
-    let b = Aabb::new(bmin, bmax);
     let pad = 1e-6 * b.extent().max_element();
-    if m < level {
-        return b.expanded(level - m + pad);
-    }
     let patch_dims = data.dims.map(|n| n - 1);
     let straddling = straddling_cells(data, level);
     // Cell `(x, y, z)` spans lattice coordinates `[x, x + 1] × …`, patch `k` in x-fastest order.
