@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::SplitMix;
 use glam::Vec3;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::camera::Camera;
@@ -16,38 +17,6 @@ use implicit_psdr::math::Ray;
 use implicit_psdr::scene::{Intersection, Scene, Shape, Surface};
 use implicit_psdr::sdf::Sdf;
 
-/// A small deterministic generator (SplitMix64) of uniform numbers in `[0, 1)`.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 40) as f32 / (1u32 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-    fn point(&mut self, half: f32) -> Vec3 {
-        Vec3::new(
-            self.range(-half, half),
-            self.range(-half, half),
-            self.range(-half, half),
-        )
-    }
-    fn direction(&mut self) -> Vec3 {
-        loop {
-            let v = self.point(1.0);
-            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                return v.normalize();
-            }
-        }
-    }
-}
-
 fn diffuse() -> Bsdf {
     Bsdf::Diffuse {
         albedo: [0.6, 0.6, 0.6].into(),
@@ -58,7 +27,7 @@ fn diffuse() -> Bsdf {
 /// unions and smooth unions) in a cube of half-width 4 around `offset`, some overlapping, plus a floor
 /// plane when `plane`.
 fn random_scene(n: usize, seed: u64, offset: Vec3, plane: bool) -> Scene {
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix(seed);
     let mut shapes = Vec::new();
     for i in 0..n {
         let c = offset + rng.point(4.0);
@@ -116,7 +85,7 @@ fn brute(scene: &Scene) -> Scene {
 }
 
 /// A point on or near the surface of a random shape: its bounds' centre, or a hit of a ray at it.
-fn aim(scene: &Scene, rng: &mut Rng) -> Vec3 {
+fn aim(scene: &Scene, rng: &mut SplitMix) -> Vec3 {
     let shape =
         &scene.shapes[(rng.next() * scene.shapes.len() as f32) as usize % scene.shapes.len()];
     let b = shape.bounds;
@@ -163,7 +132,7 @@ fn same_nearest(
 /// Random rays of every kind through `scene`, compared with and without the hierarchy.
 fn compare(scene: &Scene, rays: usize, seed: u64) -> Met {
     let without = brute(scene);
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix(seed);
     let mut met = Met::default();
     let centre = scene.camera.target.value();
     let mut exhausted = (0u64, 0u64);
@@ -285,7 +254,7 @@ fn far_from_the_origin_the_hierarchy_still_keeps_every_shape() {
 
 /// `n` balls of radius 0.15 in a cube of half-width 1.5 above a box floor, under a rectangle light, 24×24.
 fn balls(n: usize) -> Scene {
-    let mut rng = Rng(9);
+    let mut rng = SplitMix(9);
     let mut shapes: Vec<Shape> = (0..n)
         .map(|i| {
             let c = rng.point(1.5);

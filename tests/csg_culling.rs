@@ -6,6 +6,7 @@
 
 mod common;
 
+use common::SplitMix;
 use glam::Vec3;
 use implicit_psdr::bsdf::Bsdf;
 use implicit_psdr::integrator::{
@@ -13,38 +14,6 @@ use implicit_psdr::integrator::{
 };
 use implicit_psdr::scene::{Scene, Shape};
 use implicit_psdr::sdf::{GridData, Sdf};
-
-/// A small deterministic generator (SplitMix64) of uniform numbers in `[0, 1)`.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 40) as f32 / (1u32 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-    fn point(&mut self, half: f32) -> Vec3 {
-        Vec3::new(
-            self.range(-half, half),
-            self.range(-half, half),
-            self.range(-half, half),
-        )
-    }
-    fn direction(&mut self) -> Vec3 {
-        loop {
-            let v = self.point(1.0);
-            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                return v.normalize();
-            }
-        }
-    }
-}
 
 /// A small grid sampling a ball of radius `r` at `c` (a sampled distance, not an exact one inside).
 fn grid_ball(c: Vec3, r: f32) -> Sdf {
@@ -68,7 +37,7 @@ fn grid_ball(c: Vec3, r: f32) -> Sdf {
 }
 
 /// A random leaf: a ball, a rounded or sharp box, a torus, a grid or a transformed cylinder.
-fn leaf(rng: &mut Rng, half: f32) -> Sdf {
+fn leaf(rng: &mut SplitMix, half: f32) -> Sdf {
     let c = rng.point(half);
     let s = rng.range(0.1, 0.4);
     match (rng.next() * 6.0) as u32 {
@@ -99,7 +68,7 @@ fn brute(sdf: &Sdf) -> Sdf {
 
 /// Points to test `sdf` at: random ones in and around `half`, far ones, and ones on and next to the
 /// surfaces of `leaves` (a child's surface point, moved a little in and out).
-fn points(rng: &mut Rng, half: f32, leaves: &[Sdf], n: usize) -> Vec<Vec3> {
+fn points(rng: &mut SplitMix, half: f32, leaves: &[Sdf], n: usize) -> Vec<Vec3> {
     let mut out = Vec::new();
     for _ in 0..n {
         out.push(rng.point(half * 1.3));
@@ -157,13 +126,13 @@ fn same_everywhere(sdf: &Sdf, pts: &[Vec3]) -> usize {
     inside
 }
 
-fn leaves(rng: &mut Rng, n: usize, half: f32) -> Vec<Sdf> {
+fn leaves(rng: &mut SplitMix, n: usize, half: f32) -> Vec<Sdf> {
     (0..n).map(|_| leaf(rng, half)).collect()
 }
 
 #[test]
 fn unions_of_many_children_give_the_plain_values() {
-    let mut rng = Rng(1);
+    let mut rng = SplitMix(1);
     for (n, half) in [(9, 1.0), (40, 2.0), (300, 4.0), (100, 1e3)] {
         let kids = leaves(&mut rng, n, half);
         let union = Sdf::union(kids.clone());
@@ -176,7 +145,7 @@ fn unions_of_many_children_give_the_plain_values() {
 
 #[test]
 fn differences_of_many_children_give_the_plain_values() {
-    let mut rng = Rng(2);
+    let mut rng = SplitMix(2);
     for (n, half) in [(10, 1.0), (60, 2.0)] {
         let mut kids = leaves(&mut rng, n, half);
         kids[0] = Sdf::cuboid([0.0; 3], [half; 3], 0.1);
@@ -189,11 +158,11 @@ fn differences_of_many_children_give_the_plain_values() {
 
 #[test]
 fn nested_csg_and_unculled_kinds_give_the_plain_values() {
-    let mut rng = Rng(3);
+    let mut rng = SplitMix(3);
     let half = 2.0;
     // Unions of unions, smooth unions and intersections of many children (these two evaluated in full,
     // their culling boxes used by the outer union), a plane (never culled) and transformed groups.
-    let group = |rng: &mut Rng| Sdf::union(leaves(rng, 12, half));
+    let group = |rng: &mut SplitMix| Sdf::union(leaves(rng, 12, half));
     let mut kids: Vec<Sdf> = (0..6).map(|_| group(&mut rng)).collect();
     kids.push(Sdf::smooth_union(leaves(&mut rng, 12, half), 0.2));
     kids.push(Sdf::intersection(vec![
@@ -236,7 +205,7 @@ fn nested_csg_and_unculled_kinds_give_the_plain_values() {
 
 #[test]
 fn parameters_set_in_place_and_refreshed_keep_the_values_right() {
-    let mut rng = Rng(4);
+    let mut rng = SplitMix(4);
     let kids: Vec<Sdf> = (0..50)
         .map(|i| Sdf::named(format!("b{i}"), Sdf::sphere(rng.point(2.0).to_array(), 0.2)))
         .collect();
@@ -255,7 +224,7 @@ fn parameters_set_in_place_and_refreshed_keep_the_values_right() {
 
 /// `n` balls of radius 0.12 as one union shape named `balls` above a floor, under a rectangle light.
 fn ball_union(n: usize) -> Scene {
-    let mut rng = Rng(9);
+    let mut rng = SplitMix(9);
     let kids: Vec<Sdf> = (0..n)
         .map(|i| {
             Sdf::named(

@@ -30,6 +30,33 @@ fn scene() -> Scene {
     parse(json, std::path::Path::new(".")).unwrap()
 }
 
+/// Settings with every option off (constant rates, no refinement, redistancing, averaging or
+/// reduced images), nothing to optimise, 4 spp and seed 0: each test sets what it needs.
+fn plain_settings() -> Settings {
+    Settings {
+        params: vec![],
+        grids: vec![],
+        iterations: 0,
+        spp: 4,
+        loss: Loss::L2,
+        learning_rate_grids: 0.0,
+        learning_rate_params: 0.0,
+        learning_rate_decay: Decay::None,
+        learning_rate_resolution: false,
+        learning_rate_warmup: 0,
+        adam: AdamOptions::default(),
+        ema: 0.0,
+        loss_scales: 1,
+        image_scale: ImageScale::Full,
+        views_per_iteration: None,
+        seed: 0,
+        terms: Terms::Complete,
+        upsample_at: vec![],
+        redistance_every: None,
+        laplacian: 0.0,
+    }
+}
+
 #[test]
 fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
     let truth = scene();
@@ -44,25 +71,10 @@ fn named_parameters_converge_from_a_start_off_by_ten_to_twenty_percent() {
     }
     let settings = Settings {
         params: names.iter().map(|s| s.to_string()).collect(),
-        grids: vec![],
-        iterations: 0,
         spp: 32,
-        loss: Loss::L2,
-        learning_rate_grids: 0.0,
         learning_rate_params: 0.02,
-        learning_rate_decay: Decay::None,
-        learning_rate_resolution: false,
-        learning_rate_warmup: 0,
-        adam: AdamOptions::default(),
-        ema: 0.0,
-        loss_scales: 1,
-        image_scale: ImageScale::Full,
-        views_per_iteration: None,
         seed: 1,
-        terms: Terms::Complete,
-        upsample_at: vec![],
-        redistance_every: None,
-        laplacian: 0.0,
+        ..plain_settings()
     };
     let mut opt = Optimization::new(start, views, targets, settings).unwrap();
     // A step decay: Adam's steps are about the learning rate, so the last rate sets the noise floor.
@@ -150,26 +162,12 @@ fn grid_run(terms: Terms, seed: u64) -> (f64, f64, f64, f64) {
     let views = orbit(4, 3.5, &[1.5], glam::Vec3::ZERO, 40.0);
     let targets = render_targets(&target, &views, 64, 500).unwrap();
     let settings = Settings {
-        params: vec![],
         grids: vec!["blob".into()],
-        iterations: 0,
-        spp: 4,
-        loss: Loss::L2,
         learning_rate_grids: 0.02,
-        learning_rate_params: 0.0,
-        learning_rate_decay: Decay::None,
-        learning_rate_resolution: false,
-        learning_rate_warmup: 0,
-        adam: AdamOptions::default(),
-        ema: 0.0,
-        loss_scales: 1,
-        image_scale: ImageScale::Full,
-        views_per_iteration: None,
         seed,
         terms,
-        upsample_at: vec![],
         redistance_every: Some(10),
-        laplacian: 0.0,
+        ..plain_settings()
     };
     let iou_before = blob_iou(&start, &target);
     let mut opt = Optimization::new(start, views, targets, settings).unwrap();
@@ -212,26 +210,13 @@ fn a_grid_moves_towards_the_target_at_half_resolution_then_refines_at_full() {
     let views = orbit(4, 3.5, &[1.5], glam::Vec3::ZERO, 40.0);
     let targets = render_targets(&target, &views, 64, 500).unwrap();
     let settings = Settings {
-        params: vec![],
         grids: vec!["blob".into()],
-        iterations: 0,
-        spp: 4,
-        loss: Loss::L2,
         learning_rate_grids: 0.02,
-        learning_rate_params: 0.0,
-        learning_rate_decay: Decay::None,
-        learning_rate_resolution: false,
-        learning_rate_warmup: 0,
-        adam: AdamOptions::default(),
-        ema: 0.0,
-        loss_scales: 1,
         image_scale: ImageScale::Stages(vec![2, 1]),
-        views_per_iteration: None,
         seed: 3,
-        terms: Terms::Complete,
         upsample_at: vec![20],
         redistance_every: Some(10),
-        laplacian: 0.0,
+        ..plain_settings()
     };
     let before = blob_iou(&start, &target);
     let mut opt = Optimization::new(start, views, targets, settings).unwrap();

@@ -108,6 +108,43 @@ impl Rng {
     }
 }
 
+/// A small deterministic generator (SplitMix64) of uniform numbers in `[0, 1)`, points in a cube and
+/// directions, seeded by its state.
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    /// Uniform in `[0, 1)` with 24 random bits.
+    pub fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 40) as f32 / (1u32 << 24) as f32
+    }
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+    /// Uniform in the cube `[−half, half)³`.
+    pub fn point(&mut self, half: f32) -> glam::Vec3 {
+        glam::Vec3::new(
+            self.range(-half, half),
+            self.range(-half, half),
+            self.range(-half, half),
+        )
+    }
+    /// A uniform unit vector (rejection from the unit ball).
+    pub fn direction(&mut self) -> glam::Vec3 {
+        loop {
+            let v = self.point(1.0);
+            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
 pub mod chi2;
 pub mod deriv;
 pub mod hard_scenes;
