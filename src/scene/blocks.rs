@@ -381,11 +381,14 @@ impl Scene {
         Ok((hi - lo).length())
     }
 
-    /// The scene seen through `camera` (derived data recomputed).
+    /// The scene seen through `camera`. The shapes' derived data (bounds, Lipschitz bounds, empty
+    /// space) does not depend on the camera and is shared, not rebuilt; only the tracer's tolerance,
+    /// which follows the camera when no shape is finite, is recomputed.
     pub fn with_camera(&self, camera: crate::camera::Camera) -> Scene {
         let mut scene = self.clone();
+        scene.trace.eps = super::base_eps(&scene.shapes, &camera);
         scene.camera = camera;
-        scene.refreshed()
+        scene
     }
 
     /// Replaces grid node `node`'s samples by `data` (any dimensions; same box) and recomputes what

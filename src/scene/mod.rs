@@ -300,6 +300,23 @@ pub const RELATIVE_EPS: f32 = 1e-4;
 /// content's longest side (on every side).
 pub const CREASE_REGION_MARGIN: f32 = 2.0;
 
+/// The tracer's tolerance floor `eps₀` of a scene of `shapes` seen by `camera`: `10⁻⁴` of the smallest
+/// extent of the finite shapes' bounds, or of the camera's distance to its target when no shape is
+/// finite (module `trace`, "Tolerances").
+fn base_eps(shapes: &[Shape], camera: &Camera) -> f32 {
+    let smallest = (shapes.iter())
+        .filter(|s| s.bounds.is_finite() && !s.bounds.is_empty())
+        .map(|s| s.bounds.extent().min_element())
+        .filter(|e| *e > 0.0)
+        .fold(f32::INFINITY, f32::min);
+    let scale = if smallest.is_finite() {
+        smallest
+    } else {
+        (camera.target.value() - camera.origin.value()).length()
+    };
+    (RELATIVE_EPS * scale).max(f32::MIN_POSITIVE)
+}
+
 impl Scene {
     /// Assembles a scene and derives the tracer's tolerance floor from its smallest shape (the smallest
     /// extent of a finite shape's bounds; without one, the distance from the camera to its target).
@@ -310,23 +327,13 @@ impl Scene {
         shapes: Vec<Shape>,
         emitters: Vec<NamedEmitter>,
     ) -> Self {
-        let smallest = (shapes.iter())
-            .filter(|s| s.bounds.is_finite() && !s.bounds.is_empty())
-            .map(|s| s.bounds.extent().min_element())
-            .filter(|e| *e > 0.0)
-            .fold(f32::INFINITY, f32::min);
-        let scale = if smallest.is_finite() {
-            smallest
-        } else {
-            (camera.target.value() - camera.origin.value()).length()
-        };
         // Delta lights are neither: no ray meets them.
         let finite_emitters: Vec<usize> = (0..emitters.len())
             .filter(|&i| !emitters[i].emitter.is_infinite() && !emitters[i].emitter.is_delta())
             .collect();
         let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
         let trace = TraceSettings {
-            eps: (RELATIVE_EPS * scale).max(f32::MIN_POSITIVE),
+            eps: base_eps(&shapes, &camera),
             ..TraceSettings::default()
         };
         let bvh = Arc::new(Bvh::build(
@@ -700,6 +707,34 @@ mod tests {
                 }
                 (Intersection::Miss, Intersection::Miss) => {}
                 other => panic!("({x}, {y}): {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_new_camera_shares_the_shapes_and_equals_a_rebuilt_scene() {
+        let bsdf = Bsdf::Diffuse {
+            albedo: Param3::new([0.5; 3]),
+        };
+        let (lo, hi) = (glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0));
+        let ball = crate::sdf::bake(&Sdf::sphere([0.0; 3], 0.7), lo, hi, 12);
+        let grid = Shape::new("blob", Sdf::grid(ball, lo, hi).unwrap(), bsdf.clone());
+        let floor = Shape::new("floor", Sdf::plane(glam::Vec3::Y, 1.0), bsdf);
+        let mut camera = scene_with(floor.clone()).camera;
+        camera.origin = Param3::new([3.0, 40.0, -2.0]);
+        // The grid scene's tolerance follows its shape; the floor's alone follows the camera.
+        for scene in [
+            scene_with(grid.clone()),
+            scene_with(floor),
+            scene_with(grid),
+        ] {
+            let moved = scene.with_camera(camera.clone());
+            let mut rebuilt = scene.clone();
+            rebuilt.camera = camera.clone();
+            assert_eq!(moved, rebuilt.refreshed());
+            for (a, b) in moved.shapes.iter().zip(&scene.shapes) {
+                let (a, b) = (a.empty_space.as_ref(), b.empty_space.as_ref());
+                assert!(a.zip(b).is_none_or(|(a, b)| Arc::ptr_eq(a, b)));
             }
         }
     }

@@ -227,15 +227,17 @@ fn window_max(v: &[f32], dims: [usize; 3], axis: usize, w: usize) -> (Vec<f32>, 
     let mut out_dims = dims;
     out_dims[axis] = dims[axis] + 1 - w;
     let stride = [1, dims[0], dims[0] * dims[1]];
-    let mut out = Vec::with_capacity(out_dims.iter().product());
-    for z in 0..out_dims[2] {
-        for y in 0..out_dims[1] {
-            for x in 0..out_dims[0] {
-                let first = x * stride[0] + y * stride[1] + z * stride[2];
-                let m = (0..w)
-                    .map(|k| v[first + k * stride[axis]])
-                    .fold(f32::NEG_INFINITY, f32::max);
-                out.push(m);
+    let row = out_dims[0];
+    let mut out = vec![f32::NEG_INFINITY; out_dims.iter().product()];
+    // Row by row (x fastest): each output row is the elementwise maximum of `w` input rows shifted
+    // along `axis`, a loop the compiler vectorises.
+    for (r, out_row) in out.chunks_exact_mut(row).enumerate() {
+        let (y, z) = (r % out_dims[1], r / out_dims[1]);
+        let first = y * stride[1] + z * stride[2];
+        for k in 0..w {
+            let start = first + k * stride[axis];
+            for (o, &x) in out_row.iter_mut().zip(&v[start..start + row]) {
+                *o = o.max(x);
             }
         }
     }
