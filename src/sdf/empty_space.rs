@@ -101,8 +101,8 @@ impl EmptySpace {
                 }
                 let cells = data.dims.map(|n| n - 1);
                 let scale = glam::Vec3::from(cells.map(|c| c as f32)) / ext;
-                let straddling = grid::straddling_cells(data, level.value);
                 let patches = grid::patch_lipschitz(data, *bbox_min, *bbox_max, level.value);
+                let straddling: Vec<bool> = patches.iter().map(|p| p.straddling).collect();
                 Some(Self {
                     to_lattice: glam::Mat3::from_diagonal(scale),
                     offset: -*bbox_min * scale,
@@ -238,78 +238,132 @@ fn neighbourhood_inverse_bounds(
     patches: &[grid::PatchLipschitz],
     cells: [usize; 3],
 ) -> Vec<[f32; 2]> {
+    // The maximum over the 3×3×3 block is three maxima over 3 cells along each axis in turn.
+    let mut bound: Vec<[f32; 2]> = (patches.iter())
+        .map(|p| [p.outside, p.inside].map(|reaches| if reaches { p.bound } else { 0.0 }))
+        .collect();
+    let strides = [1, cells[0], cells[0] * cells[1]];
+    for (a, &n) in cells.iter().enumerate() {
+        let stride = strides[a];
+        let before = bound.clone();
+        for (k, out) in bound.iter_mut().enumerate() {
+            let i = (k / stride) % n;
+            let near = |j: usize| before[k - i * stride + j * stride];
+            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            for j in lo..=hi {
+                let b = near(j);
+                *out = [out[0].max(b[0]), out[1].max(b[1])];
+            }
+        }
+    }
+    bound
+        .into_iter()
+        .map(|b| b.map(|b| if b > 0.0 { 1.0 / b } else { 0.0 }))
+        .collect()
+}
+
+/// The chessboard (L∞) distance, in cells, from each cell to the nearest `seed` cell, saturated at 255
+/// (255 everywhere when there is none): the two-pass chamfer transform with the full 3×3×3 mask of unit
+/// weights, which is exact for this metric. The cells are padded by one layer of 255 on every side, so
+/// that every cell has all its neighbours.
+fn chessboard_distance(seed: &[bool], cells: [usize; 3]) -> Vec<u8> {
     let [nx, ny, nz] = cells;
-    let mut out = Vec::with_capacity(patches.len());
+    let (px, py) = (nx + 2, ny + 2);
+    let padded = |x: usize, y: usize, z: usize| (x + 1) + px * ((y + 1) + py * (z + 1));
+    let mut d = vec![255u8; px * py * (nz + 2)];
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {
-                let mut bound = [0.0f32; 2];
-                for qz in z.saturating_sub(1)..(z + 2).min(nz) {
-                    for qy in y.saturating_sub(1)..(y + 2).min(ny) {
-                        for qx in x.saturating_sub(1)..(x + 2).min(nx) {
-                            let p = patches[qx + nx * (qy + ny * qz)];
-                            if p.outside {
-                                bound[0] = bound[0].max(p.bound);
-                            }
-                            if p.inside {
-                                bound[1] = bound[1].max(p.bound);
-                            }
-                        }
-                    }
+                if seed[x + nx * (y + ny * z)] {
+                    d[padded(x, y, z)] = 0;
                 }
-                out.push(bound.map(|b| if b > 0.0 { 1.0 / b } else { 0.0 }));
+            }
+        }
+    }
+    // The 13 neighbours that come before a cell in scan order, as offsets back from it.
+    let mut back = Vec::with_capacity(13);
+    for dz in -1isize..=1 {
+        for dy in -1isize..=1 {
+            for dx in -1isize..=1 {
+                if (dz, dy, dx) < (0, 0, 0) {
+                    back.push((-(dx + px as isize * (dy + py as isize * dz))) as usize);
+                }
+            }
+        }
+    }
+    let relax = |d: &mut [u8], k: usize, forward: bool| {
+        let mut best = d[k];
+        for &o in &back {
+            let n = if forward { d[k - o] } else { d[k + o] };
+            best = best.min(n.saturating_add(1));
+        }
+        d[k] = best;
+    };
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                relax(&mut d, padded(x, y, z), true);
+            }
+        }
+    }
+    for z in (0..nz).rev() {
+        for y in (0..ny).rev() {
+            for x in (0..nx).rev() {
+                relax(&mut d, padded(x, y, z), false);
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(seed.len());
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                out.push(d[padded(x, y, z)]);
             }
         }
     }
     out
 }
 
-/// The chessboard (L∞) distance, in cells, from each cell to the nearest `seed` cell, saturated at 255
-/// (255 everywhere when there is none): the two-pass chamfer transform with the full 3×3×3 mask of unit
-/// weights, which is exact for this metric.
-fn chessboard_distance(seed: &[bool], cells: [usize; 3]) -> Vec<u8> {
-    let [nx, ny, nz] = cells;
-    let mut d: Vec<u8> = seed.iter().map(|&s| if s { 0 } else { 255 }).collect();
-    let index = |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
-    let mut pass = |order: &mut dyn Iterator<Item = usize>, forward: bool| {
-        for k in order {
-            let (x, y, z) = (k % nx, (k / nx) % ny, k / (nx * ny));
-            let mut best = d[k];
-            for dz in -1isize..=1 {
-                for dy in -1isize..=1 {
-                    for dx in -1isize..=1 {
-                        // Half of the mask per pass: the neighbours already visited in scan order.
-                        let before = (dz, dy, dx) < (0, 0, 0);
-                        if before != forward || (dz, dy, dx) == (0, 0, 0) {
-                            continue;
-                        }
-                        let (qx, qy, qz) = (x as isize + dx, y as isize + dy, z as isize + dz);
-                        if qx < 0
-                            || qy < 0
-                            || qz < 0
-                            || qx >= nx as isize
-                            || qy >= ny as isize
-                            || qz >= nz as isize
-                        {
-                            continue;
-                        }
-                        let n = d[index(qx as usize, qy as usize, qz as usize)];
-                        best = best.min(n.saturating_add(1));
-                    }
-                }
-            }
-            d[k] = best;
-        }
-    };
-    let n = seed.len();
-    pass(&mut (0..n), true);
-    pass(&mut (0..n).rev(), false);
-    d
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn neighbourhood_bounds_match_brute_force() {
+        let cells = [6, 4, 5];
+        let n: usize = cells.iter().product();
+        let patches: Vec<grid::PatchLipschitz> = (0..n)
+            .map(|k| grid::PatchLipschitz {
+                bound: 1.0 + ((k * 29 + 7) % 31) as f32 / 8.0,
+                outside: k % 3 != 0,
+                inside: k % 5 == 1,
+                straddling: false,
+            })
+            .collect();
+        let got = neighbourhood_inverse_bounds(&patches, cells);
+        let coords = |k: usize| {
+            [
+                k % cells[0],
+                (k / cells[0]) % cells[1],
+                k / (cells[0] * cells[1]),
+            ]
+        };
+        for (k, got) in got.iter().enumerate() {
+            let mut want = [0.0f32; 2];
+            for (j, p) in patches.iter().enumerate() {
+                let (a, b) = (coords(k), coords(j));
+                if (0..3).all(|i| a[i].abs_diff(b[i]) <= 1) {
+                    for (side, reaches) in [p.outside, p.inside].into_iter().enumerate() {
+                        if reaches {
+                            want[side] = want[side].max(p.bound);
+                        }
+                    }
+                }
+            }
+            let want = want.map(|b| if b > 0.0 { 1.0 / b } else { 0.0 });
+            assert_eq!(*got, want, "cell {:?}", coords(k));
+        }
+    }
 
     #[test]
     fn chessboard_distance_matches_brute_force() {

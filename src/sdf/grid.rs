@@ -309,6 +309,9 @@ pub(super) struct PatchLipschitz {
     pub outside: bool,
     /// Whether it can hold points inside (`φ ≤ 0`).
     pub inside: bool,
+    /// Whether its control points lie on both sides of the level (or on it): only such a patch can
+    /// hold the surface ([`straddling_cells`]).
+    pub straddling: bool,
 }
 
 /// [`PatchLipschitz`] of every patch (lattice cell), x fastest. `data` must be usable.
@@ -368,6 +371,7 @@ pub(super) fn patch_lipschitz(
                     bound: bound.sqrt() * (1.0 + 1e-6),
                     outside: on_face || highest[k] >= 0.0,
                     inside: on_face || lowest[k] >= 0.0,
+                    straddling: highest[k] >= 0.0 && lowest[k] >= 0.0,
                 });
                 k += 1;
             }
