@@ -200,58 +200,46 @@ fn spline_at_nodes(c: &[f32], out: &mut [f32]) {
 /// Fast sweeping for `|∇d| = 1` on a lattice of spacings `h`: the non-frozen entries of `d` (initially
 /// `∞`) become the upwind distances from the frozen ones, in eight sweep orders, repeated until nothing
 /// changes (at most four rounds).
+///
+/// The sweeps run on a copy of `d` padded by one layer of `∞` on every side, so that every node has its
+/// six neighbours (a missing one counted as `∞`, as it was).
 fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
     let [nx, ny, nz] = dims;
+    let (px, py) = (nx + 2, ny + 2);
+    let padded = |x: usize, y: usize, z: usize| (x + 1) + px * ((y + 1) + py * (z + 1));
     let index = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
+    let mut p = vec![f32::INFINITY; px * py * (nz + 2)];
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                p[padded(x, y, z)] = d[index(x, y, z)];
+            }
+        }
+    }
     let h = [h.x, h.y, h.z];
+    let stride = [1, px, px * py];
+    let order = |n: usize, flip: bool| (0..n).map(move |i| if flip { n - 1 - i } else { i });
     for _round in 0..4 {
         let mut changed = false;
         for dir in 0..8 {
-            let order = |n: usize, flip: bool| -> Vec<usize> {
-                if flip {
-                    (0..n).rev().collect()
-                } else {
-                    (0..n).collect()
-                }
-            };
             for z in order(nz, dir & 4 != 0) {
                 for y in order(ny, dir & 2 != 0) {
                     for x in order(nx, dir & 1 != 0) {
-                        let i = index(x, y, z);
-                        if frozen[i] {
+                        if frozen[index(x, y, z)] {
                             continue;
                         }
-                        let pair = |lo: Option<usize>, hi: Option<usize>| {
-                            lo.map_or(f32::INFINITY, |j| d[j])
-                                .min(hi.map_or(f32::INFINITY, |j| d[j]))
-                        };
-                        let mut near = [
-                            (
-                                pair(
-                                    (x > 0).then(|| index(x - 1, y, z)),
-                                    (x + 1 < nx).then(|| index(x + 1, y, z)),
-                                ),
-                                h[0],
-                            ),
-                            (
-                                pair(
-                                    (y > 0).then(|| index(x, y - 1, z)),
-                                    (y + 1 < ny).then(|| index(x, y + 1, z)),
-                                ),
-                                h[1],
-                            ),
-                            (
-                                pair(
-                                    (z > 0).then(|| index(x, y, z - 1)),
-                                    (z + 1 < nz).then(|| index(x, y, z + 1)),
-                                ),
-                                h[2],
-                            ),
-                        ];
-                        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        let i = padded(x, y, z);
+                        let mut near =
+                            [0, 1, 2].map(|a| (p[i - stride[a]].min(p[i + stride[a]]), h[a]));
+                        // A stable sort of three by value (ties keep their axis order).
+                        for (j, k) in [(0, 1), (1, 2), (0, 1)] {
+                            if near[j].0.total_cmp(&near[k].0).is_gt() {
+                                near.swap(j, k);
+                            }
+                        }
                         let u = godunov(&near);
-                        if u < d[i] {
-                            d[i] = u;
+                        if u < p[i] {
+                            p[i] = u;
                             changed = true;
                         }
                     }
@@ -260,6 +248,13 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
         }
         if !changed {
             break;
+        }
+    }
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                d[index(x, y, z)] = p[padded(x, y, z)];
+            }
         }
     }
 }
