@@ -1,5 +1,7 @@
 //! Empty-space skipping of grid shapes: the cells it skips hold no surface, the neighbourhood Lipschitz
-//! bounds it steps with hold, and tracing finds the same hits with and without it.
+//! bounds it steps with hold, and tracing finds the same hits with and without it; the boxes its cells
+//! prove empty hold no surface, and the silhouette culling that uses them keeps the same boxes and
+//! extracts the same curves as interval arithmetic alone.
 //!
 //! The shape is a baked union of two spheres (the kink of its outside distance between the lobes is where
 //! a grid's bound is steepest), rotated, scaled and moved away from the origin.
@@ -7,10 +9,12 @@
 use glam::Vec3;
 use implicit_psdr::Param3;
 use implicit_psdr::bsdf::Bsdf;
-use implicit_psdr::math::Ray;
+use implicit_psdr::integrator::silhouette_boxes::{BoxClass, classify_box, silhouette_boxes};
+use implicit_psdr::integrator::silhouette_curve::{CurveOptions, extract_silhouette};
+use implicit_psdr::math::{Aabb, Ray};
 use implicit_psdr::sampler::Sampler;
 use implicit_psdr::scene::Shape;
-use implicit_psdr::sdf::{EmptySpace, Sdf, bake};
+use implicit_psdr::sdf::{BoxCells, EmptySpace, Sdf, bake};
 use implicit_psdr::trace::{ShapeTrace, TraceSettings};
 
 fn blob() -> Shape {
@@ -213,4 +217,115 @@ fn only_grids_whose_surface_stays_in_their_box_skip() {
     let (lo, hi) = (Vec3::splat(-0.5), Vec3::splat(0.5));
     let grid = Sdf::grid(bake(&Sdf::sphere([0.0; 3], 1.0), lo, hi, 8), lo, hi).unwrap();
     assert!(EmptySpace::of(&grid).is_none());
+}
+
+/// A random box inside the shape's bounds, from a tenth of a cell to about ten cells wide.
+fn box_in_bounds(shape: &Shape, s: &mut Sampler) -> Aabb {
+    let cell = shape.empty_space.as_deref().expect("a grid").cell_size;
+    let half = cell * 0.05 * 100f32.powf(s.next_1d());
+    let c = point_in_bounds(shape, s);
+    let h = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * half + Vec3::splat(0.1 * half);
+    Aabb::new(c - h, c + h)
+}
+
+#[test]
+fn boxes_of_empty_cells_hold_no_surface() {
+    let shape = blob();
+    let space = shape.empty_space.as_deref().expect("a grid");
+    let mut s = Sampler::new(13, 0, 0, 0);
+    let mut counts = [0usize; 3];
+    for _ in 0..3000 {
+        let b = box_in_bounds(&shape, &mut s);
+        let cells = space.box_cells(&b);
+        counts[cells as usize] += 1;
+        if cells != BoxCells::Empty {
+            continue;
+        }
+        // φ keeps one sign over a 9 × 9 × 9 lattice of the box's points, faces and corners included.
+        let at = |i: usize, j: usize, k: usize| {
+            let f = Vec3::new(i as f32, j as f32, k as f32) / 8.0;
+            shape.sdf.eval_f32(b.min + (b.max - b.min) * f)
+        };
+        let first = at(0, 0, 0);
+        for k in 0..9 {
+            for j in 0..9 {
+                for i in 0..9 {
+                    let phi = at(i, j, k);
+                    assert!(phi * first > 0.0, "box {b:?}: φ = {phi} against {first}");
+                }
+            }
+        }
+    }
+    // Boxes of every kind: empty, next to the surface, reaching out of the lattice.
+    assert!(counts.iter().all(|&n| n > 200), "{counts:?}");
+}
+
+/// The blob's grid without its transform, moved by the shape's translation: lattice-aligned boxes.
+fn aligned_blob() -> Shape {
+    let blob = blob();
+    let Sdf::Transform { child, .. } = &blob.sdf else {
+        panic!("the blob is a transformed grid");
+    };
+    Shape::translated(
+        "aligned",
+        (**child).clone(),
+        blob.bsdf.clone(),
+        Param3::new([3.0, -2.0, 1.5]),
+    )
+}
+
+/// Where the cell map proves a box empty, interval arithmetic (which encloses a rotated box's image
+/// in the lattice more loosely) may keep it: the only difference allowed, and the extracted curve is
+/// the same. Lattice-aligned, the kept boxes are the same too.
+#[test]
+fn silhouette_culling_is_the_same_with_and_without_the_cell_map() {
+    let mut s = Sampler::new(17, 0, 0, 0);
+    for (shape, aligned) in [(blob(), false), (aligned_blob(), true)] {
+        let plain = Shape {
+            empty_space: None,
+            enclosures: None,
+            ..shape.clone()
+        };
+        let space = shape.empty_space.clone().expect("a grid");
+        let t = shape.translate.value();
+        let centre = (shape.bounds.min + shape.bounds.max) * 0.5;
+        let radius = (shape.bounds.max - shape.bounds.min).length();
+        let mut differ = 0;
+        for _ in 0..4 {
+            let eye = centre + unit_vector(&mut s) * 2.0 * radius;
+            for _ in 0..500 {
+                let b = box_in_bounds(&shape, &mut s);
+                let (got, want) = (classify_box(&shape, eye, &b), classify_box(&plain, eye, &b));
+                if got != want {
+                    differ += 1;
+                    let local = Aabb::new(b.min - t, b.max - t);
+                    assert!(
+                        got == BoxClass::NoSurface && space.box_cells(&local) == BoxCells::Empty,
+                        "box {b:?} seen from {eye}: {got:?} against {want:?}"
+                    );
+                }
+            }
+            let (with, without) = (
+                silhouette_boxes(&shape, eye, 6, 0.0).unwrap(),
+                silhouette_boxes(&plain, eye, 6, 0.0).unwrap(),
+            );
+            assert!(with.iter().all(|b| without.contains(b)));
+            if aligned {
+                assert_eq!(with, without);
+            }
+            let options = CurveOptions::default();
+            let curve = extract_silhouette(&shape, eye, &options).unwrap();
+            let reference = extract_silhouette(&plain, eye, &options).unwrap();
+            assert!(curve.polyline.segments.len() > 50);
+            assert_eq!(curve.polyline.points, reference.polyline.points);
+            assert_eq!(curve.polyline.segments, reference.polyline.segments);
+            // A second extraction reads the memo's enclosures: the same curve.
+            assert_eq!(curve, extract_silhouette(&shape, eye, &options).unwrap());
+        }
+        assert!(aligned || differ > 0, "the rotated grid's boxes all agree");
+        assert!(
+            !aligned || differ == 0,
+            "{differ} lattice-aligned boxes differ"
+        );
+    }
 }

@@ -26,6 +26,7 @@ use crate::error::Result;
 use crate::math::Vec3;
 use crate::math::{Aabb, Ray};
 use crate::scalar::{Param3, Scalar};
+use crate::sdf::interval::EnclosureMemo;
 use crate::sdf::{EmptySpace, Lipschitz, Sdf};
 use crate::trace::{ShapeTrace, TraceSettings, first_crossing_skipping};
 use std::sync::Arc;
@@ -57,6 +58,10 @@ pub struct Shape {
     /// Where a grid shape certainly has no surface ([`EmptySpace`]), so that tracing skips it; `None`
     /// for every other shape.
     pub empty_space: Option<Arc<EmptySpace>>,
+    /// The enclosures of a grid shape's `φ` and `∇φ` over the silhouette culling's boxes, shared by
+    /// every view of the shape ([`EnclosureMemo`]); `None` for every other shape (their enclosures
+    /// are cheap). Built anew with the shape: set it to `None` when changing `sdf` in place.
+    pub enclosures: Option<Arc<EnclosureMemo>>,
 }
 
 impl Shape {
@@ -75,6 +80,7 @@ impl Shape {
         let creased = sdf.creases().is_some();
         let convex = sdf.is_convex();
         let empty_space = EmptySpace::of(&sdf).map(Arc::new);
+        let enclosures = (empty_space.is_some()).then(|| Arc::new(EnclosureMemo::default()));
         Self {
             name: name.into(),
             sdf,
@@ -86,6 +92,7 @@ impl Shape {
             creased,
             convex,
             empty_space,
+            enclosures,
         }
     }
 

@@ -15,7 +15,7 @@
 //! change the grid, its level or its transforms rebuild it with the shape.
 
 use super::{Sdf, Similarity, grid};
-use crate::math::Ray;
+use crate::math::{Aabb, Ray};
 use std::cmp::Ordering;
 
 /// The chessboard distance map of a grid shape's straddling cells, and the map from the shape's frame to
@@ -43,6 +43,17 @@ pub struct EmptySpace {
     /// The shortest edge of a cell in the shape's frame: how far from a point the neighbourhood's
     /// bounds certainly hold.
     pub cell_size: f32,
+}
+
+/// What the lattice cells a box touches hold ([`EmptySpace::box_cells`]).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum BoxCells {
+    /// Every cell is empty: the box holds no surface point.
+    Empty,
+    /// One of the cells straddles the level: the box may hold surface points.
+    Straddling,
+    /// The box reaches beyond the lattice (or is not finite): nothing is known.
+    Unknown,
 }
 
 /// Where a ray can first meet the surface ([`EmptySpace::first_candidate_lattice`]).
@@ -114,6 +125,43 @@ impl EmptySpace {
             }
             _ => None,
         }
+    }
+
+    /// What the cells touched by the box `b` (in the shape's frame) hold. The box's corners are mapped
+    /// to the lattice and the cells of their bounding box, grown by a thousandth of a cell against the
+    /// map's rounding, are looked up: [`BoxCells::Empty`] proves that no surface point is in `b`
+    /// (module notes), without evaluating the spline.
+    pub fn box_cells(&self, b: &Aabb) -> BoxCells {
+        let (mut lo, mut hi) = (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY);
+        for k in 0..8 {
+            let corner = glam::Vec3::new(
+                if k & 1 == 0 { b.min.x } else { b.max.x },
+                if k & 2 == 0 { b.min.y } else { b.max.y },
+                if k & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            let u = self.to_lattice * corner + self.offset;
+            lo = lo.min(u);
+            hi = hi.max(u);
+        }
+        const SLACK: f32 = 1e-3;
+        let mut range = [(0usize, 0usize); 3];
+        for a in 0..3 {
+            let (l, h) = ((lo[a] - SLACK).floor(), (hi[a] + SLACK).floor());
+            // Also refuses NaN: the comparisons fail.
+            if !(l >= 0.0 && h < self.cells[a] as f32 && l <= h) {
+                return BoxCells::Unknown;
+            }
+            range[a] = (l as usize, h as usize);
+        }
+        for z in range[2].0..=range[2].1 {
+            for y in range[1].0..=range[1].1 {
+                let row = self.cells[0] * (y + self.cells[1] * z);
+                if self.distance[row + range[0].0..=row + range[0].1].contains(&0) {
+                    return BoxCells::Straddling;
+                }
+            }
+        }
+        BoxCells::Empty
     }
 
     /// The ray (in the shape's frame) in lattice coordinates, with the same parameter `t`.

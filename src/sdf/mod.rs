@@ -49,7 +49,7 @@ pub use crease_edges::{CreaseEdge, EdgeCurve, Face};
 pub use creases::surfaces_may_meet;
 pub use crossing_creases::CrossingCrease;
 pub use culling::{CULL_MIN_CHILDREN, Children};
-pub use empty_space::{Candidate, EmptySpace, LatticeRay};
+pub use empty_space::{BoxCells, Candidate, EmptySpace, LatticeRay};
 pub use line_crossings::LineCrossings;
 pub use primitive::SdfPrimitive;
 pub use transform::{AngleTrig, Similarity};

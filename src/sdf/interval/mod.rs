@@ -12,9 +12,11 @@ use super::Sdf;
 use crate::math::{Aabb, Vec3};
 
 mod grid;
+mod memo;
 
 pub use crate::scalar::interval::{Enclosure, Interval, IntervalGrad};
 pub(super) use grid::GridEnclosure;
+pub use memo::EnclosureMemo;
 
 impl Sdf {
     /// Enclosure of `φ(B)` over the box `b` (the node's own coordinates).
