@@ -729,12 +729,11 @@ mod tests {
         let floor = Shape::new("floor", Sdf::plane(glam::Vec3::Y, 1.0), bsdf);
         let mut camera = scene_with(floor.clone()).camera;
         camera.origin = Param3::new([3.0, 40.0, -2.0]);
-        // The grid scene's tolerance follows its shape; the floor's alone follows the camera.
-        for scene in [
-            scene_with(grid.clone()),
-            scene_with(floor),
-            scene_with(grid),
-        ] {
+        let mut both = scene_with(grid.clone());
+        both.shapes.push(floor.clone());
+        let both = both.refreshed();
+        // A scene with a grid takes its tolerance from the grid; the floor's alone, from the camera.
+        for scene in [scene_with(grid), scene_with(floor), both] {
             let moved = scene.with_camera(camera.clone());
             let mut rebuilt = scene.clone();
             rebuilt.camera = camera.clone();
