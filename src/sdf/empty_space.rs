@@ -316,25 +316,17 @@ fn neighbourhood_inverse_bounds(
 /// that every cell has all its neighbours.
 fn chessboard_distance(seed: &[bool], cells: [usize; 3]) -> Vec<u8> {
     let [nx, ny, nz] = cells;
-    let (px, py) = (nx + 2, ny + 2);
-    let padded = |x: usize, y: usize, z: usize| (x + 1) + px * ((y + 1) + py * (z + 1));
-    let mut d = vec![255u8; px * py * (nz + 2)];
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                if seed[x + nx * (y + ny * z)] {
-                    d[padded(x, y, z)] = 0;
-                }
-            }
-        }
-    }
+    let start: Vec<u8> = seed.iter().map(|&s| if s { 0 } else { 255 }).collect();
+    let mut d = grid::Padded::new(&start, cells, 255u8);
+    let stride = d.strides();
     // The 13 neighbours that come before a cell in scan order, as offsets back from it.
     let mut back = Vec::with_capacity(13);
     for dz in -1isize..=1 {
         for dy in -1isize..=1 {
             for dx in -1isize..=1 {
                 if (dz, dy, dx) < (0, 0, 0) {
-                    back.push((-(dx + px as isize * (dy + py as isize * dz))) as usize);
+                    let ahead = dx + dy * stride[1] as isize + dz * stride[2] as isize;
+                    back.push((-ahead) as usize);
                 }
             }
         }
@@ -350,26 +342,20 @@ fn chessboard_distance(seed: &[bool], cells: [usize; 3]) -> Vec<u8> {
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {
-                relax(&mut d, padded(x, y, z), true);
+                let k = d.index(x, y, z);
+                relax(&mut d.values, k, true);
             }
         }
     }
     for z in (0..nz).rev() {
         for y in (0..ny).rev() {
             for x in (0..nx).rev() {
-                relax(&mut d, padded(x, y, z), false);
+                let k = d.index(x, y, z);
+                relax(&mut d.values, k, false);
             }
         }
     }
-    let mut out = Vec::with_capacity(seed.len());
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                out.push(d[padded(x, y, z)]);
-            }
-        }
-    }
-    out
+    d.unpadded()
 }
 
 #[cfg(test)]

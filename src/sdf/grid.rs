@@ -221,6 +221,56 @@ fn extended_lattice(data: &GridData) -> (Vec<f32>, [usize; 3]) {
     (out, e)
 }
 
+/// A lattice of `dims` (x fastest) padded by one layer of a fill value on every side, so that every
+/// point of the lattice has its 26 neighbours (the sweeps of the chessboard transform and of
+/// redistancing read them without bounds tests).
+pub(super) struct Padded<T> {
+    /// The padded values, `(dims[0] + 2) × (dims[1] + 2) × (dims[2] + 2)`, x fastest.
+    pub values: Vec<T>,
+    dims: [usize; 3],
+}
+
+impl<T: Copy> Padded<T> {
+    /// `values` (dimensions `dims`) surrounded by `fill`.
+    pub fn new(values: &[T], dims: [usize; 3], fill: T) -> Self {
+        let mut padded = Self {
+            values: vec![fill; (dims[0] + 2) * (dims[1] + 2) * (dims[2] + 2)],
+            dims,
+        };
+        let row = dims[0];
+        for (r, line) in values.chunks_exact(row).enumerate() {
+            let at = padded.index(0, r % dims[1], r / dims[1]);
+            padded.values[at..at + row].copy_from_slice(line);
+        }
+        padded
+    }
+
+    /// The position of lattice point `(x, y, z)` (unpadded coordinates) in [`Padded::values`].
+    #[inline(always)]
+    pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
+        (x + 1) + (self.dims[0] + 2) * ((y + 1) + (self.dims[1] + 2) * (z + 1))
+    }
+
+    /// The steps in [`Padded::values`] from a point to its next neighbour along x, y and z.
+    pub fn strides(&self) -> [usize; 3] {
+        let px = self.dims[0] + 2;
+        [1, px, px * (self.dims[1] + 2)]
+    }
+
+    /// The lattice without its padding.
+    pub fn unpadded(&self) -> Vec<T> {
+        let row = self.dims[0];
+        let mut out = Vec::with_capacity(row * self.dims[1] * self.dims[2]);
+        for z in 0..self.dims[2] {
+            for y in 0..self.dims[1] {
+                let at = self.index(0, y, z);
+                out.extend_from_slice(&self.values[at..at + row]);
+            }
+        }
+        out
+    }
+}
+
 /// The maximum of `v` (dimensions `dims`, x fastest) over windows of `w` consecutive entries along `axis`:
 /// the result has `dims[axis] − w + 1` entries along it.
 fn window_max(v: &[f32], dims: [usize; 3], axis: usize, w: usize) -> (Vec<f32>, [usize; 3]) {

@@ -205,19 +205,10 @@ fn spline_at_nodes(c: &[f32], out: &mut [f32]) {
 /// six neighbours (a missing one counted as `∞`, as it was).
 fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
     let [nx, ny, nz] = dims;
-    let (px, py) = (nx + 2, ny + 2);
-    let padded = |x: usize, y: usize, z: usize| (x + 1) + px * ((y + 1) + py * (z + 1));
     let index = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
-    let mut p = vec![f32::INFINITY; px * py * (nz + 2)];
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                p[padded(x, y, z)] = d[index(x, y, z)];
-            }
-        }
-    }
+    let mut p = super::grid::Padded::new(d, dims, f32::INFINITY);
     let h = [h.x, h.y, h.z];
-    let stride = [1, px, px * py];
+    let stride = p.strides();
     let order = |n: usize, flip: bool| (0..n).map(move |i| if flip { n - 1 - i } else { i });
     for _round in 0..4 {
         let mut changed = false;
@@ -228,9 +219,10 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
                         if frozen[index(x, y, z)] {
                             continue;
                         }
-                        let i = padded(x, y, z);
+                        let i = p.index(x, y, z);
+                        let v = &mut p.values;
                         let mut near =
-                            [0, 1, 2].map(|a| (p[i - stride[a]].min(p[i + stride[a]]), h[a]));
+                            [0, 1, 2].map(|a| (v[i - stride[a]].min(v[i + stride[a]]), h[a]));
                         // A stable sort of three by value (ties keep their axis order).
                         for (j, k) in [(0, 1), (1, 2), (0, 1)] {
                             if near[j].0.total_cmp(&near[k].0).is_gt() {
@@ -238,8 +230,8 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
                             }
                         }
                         let u = godunov(&near);
-                        if u < p[i] {
-                            p[i] = u;
+                        if u < v[i] {
+                            v[i] = u;
                             changed = true;
                         }
                     }
@@ -250,13 +242,7 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
             break;
         }
     }
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                d[index(x, y, z)] = p[padded(x, y, z)];
-            }
-        }
-    }
+    d.copy_from_slice(&p.unpadded());
 }
 
 /// The upwind solution `u` of `Σ_k ((u − a_k)⁺ / h_k)² = 1` for neighbour values `a_k` sorted
