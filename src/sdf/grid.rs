@@ -88,14 +88,28 @@ fn axis_taps<S: Scalar>(u: S, n: usize) -> ([usize; 4], [S; 4]) {
     let b1 = (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth;
     let b2 = (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth;
     let b3 = t3 * sixth;
+    fold_ghosts(i, n, [b0, b1, b2, b3], S::zero())
+}
+
+/// The lattice indices of the four taps of cell `i` (of `n ≥ 4` points) with the weights `b` of taps
+/// `i − 1 ..= i + 2` (any linear quantity: the basis or its derivatives), the ghost points folded in.
+#[inline(always)]
+pub(super) fn fold_ghosts<T>(i: usize, n: usize, b: [T; 4], zero: T) -> ([usize; 4], [T; 4])
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f32, Output = T>,
+{
+    let [b0, b1, b2, b3] = b;
     if i == 0 {
         // Ghost c_{−1} = 2c_0 − c_1.
-        ([0, 1, 2, 3], [b1 + b0 * 2.0, b2 - b0, b3, S::zero()])
+        ([0, 1, 2, 3], [b1 + b0 * 2.0, b2 - b0, b3, zero])
     } else if i == n - 2 {
         // Ghost c_n = 2c_{n−1} − c_{n−2}.
         (
             [n - 3, n - 2, n - 1, n - 1],
-            [b0, b1 - b3, b2 + b3 * 2.0, S::zero()],
+            [b0, b1 - b3, b2 + b3 * 2.0, zero],
         )
     } else {
         ([i - 1, i, i + 1, i + 2], [b0, b1, b2, b3])

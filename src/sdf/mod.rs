@@ -36,6 +36,7 @@ mod culling;
 mod empty_space;
 mod grid;
 mod grid_edit;
+mod grid_jet;
 pub mod interval;
 mod line_crossings;
 mod primitive;
@@ -354,7 +355,7 @@ impl Sdf {
     }
 
     /// `∇φ(p)` (not normalised), by forward-mode AD ([`DualVec3`]), with analytic fast paths for the
-    /// sphere and the box. Zero (never NaN) where `φ` is not differentiable in a way `safe_sqrt` guards,
+    /// sphere, the box and a grid inside its box. Zero (never NaN) where `φ` is not differentiable in a way `safe_sqrt` guards,
     /// e.g. at a sphere's centre.
     pub fn gradient(&self, p: glam::Vec3) -> glam::Vec3 {
         match self {
@@ -367,6 +368,15 @@ impl Sdf {
                 half_size,
                 rounding,
             } => box_gradient(p - center.value(), half_size.value(), rounding.value, false),
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+                ..
+            } => match grid_jet::jet::<false>(data, *bbox_min, *bbox_max, p) {
+                Some((_, g, _)) => g,
+                None => self.ad_gradient(p),
+            },
             // The child's fast path, if it has one.
             Sdf::Named { child, .. } => child.gradient(p),
             _ => self.ad_gradient(p),
@@ -408,7 +418,8 @@ impl Sdf {
             .unwrap_or(glam::Vec3::Z)
     }
 
-    /// Value, gradient and Hessian at `p` by second-order forward AD ([`Dual2Vec3`]).
+    /// Value, gradient and Hessian at `p` by second-order forward AD ([`Dual2Vec3`]), or from a grid's
+    /// taps inside its box (the same numbers to rounding, several times faster).
     pub fn hessian(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
         self.hessian_as::<false>(p)
     }
@@ -419,6 +430,14 @@ impl Sdf {
     }
 
     fn hessian_as<const FACES: bool>(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
+        if let Some(jet) = self.grid_jet(p) {
+            return jet;
+        }
+        self.ad_hessian_as::<FACES>(p)
+    }
+
+    /// [`Sdf::hessian_as`] by second-order forward AD on every node (the reference of the fast path).
+    fn ad_hessian_as<const FACES: bool>(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
         let v = self.eval_as::<_, FACES>(Vec3::new(
             Dual2Vec3::from_re(p.x).derivative(0),
             Dual2Vec3::from_re(p.y).derivative(1),
@@ -433,6 +452,23 @@ impl Sdf {
             }))
         });
         (v.re, g, h)
+    }
+
+    /// A grid's (or a named grid's) value, gradient and Hessian from its taps ([`grid_jet`]), inside
+    /// its box; `None` elsewhere and for every other node.
+    fn grid_jet(&self, p: glam::Vec3) -> Option<(f32, glam::Vec3, glam::Mat3)> {
+        match self {
+            Sdf::Grid {
+                data,
+                bbox_min,
+                bbox_max,
+                level,
+                ..
+            } => grid_jet::jet::<true>(data, *bbox_min, *bbox_max, p)
+                .map(|(v, g, h)| (v - level.value, g, h)),
+            Sdf::Named { child, .. } => child.grid_jet(p),
+            _ => None,
+        }
     }
 
     /// Total curvature `κ = ∇·n = (tr H − nᵀHn)/|∇φ|` of the level set through `p` (sum of principal
