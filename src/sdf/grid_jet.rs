@@ -71,7 +71,7 @@ pub(super) fn jet<const SECOND: bool>(
     bmax: glam::Vec3,
     p: glam::Vec3,
 ) -> Option<(f32, glam::Vec3, glam::Mat3)> {
-    if !data.usable() || !(p.cmpge(bmin).all() && p.cmple(bmax).all()) {
+    if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
         return None;
     }
     let ext = bmax - bmin;
@@ -152,7 +152,7 @@ mod tests {
     /// cells' taps and the box's closed ends).
     fn point(bmin: glam::Vec3, bmax: glam::Vec3, u: [f32; 3], k: usize) -> glam::Vec3 {
         let mut u = glam::Vec3::from(u);
-        if k % 8 == 0 {
+        if k.is_multiple_of(8) {
             u[k / 8 % 3] = (k / 24 % 2) as f32;
         }
         (bmin + (bmax - bmin) * u).clamp(bmin, bmax)
@@ -211,6 +211,96 @@ mod tests {
                 "case {c}: Hessian off by {worst_h} of its scale"
             );
         }
+    }
+
+    /// Under similarity transforms (rotated, scaled, moved away from the origin, nested, named) the
+    /// mapped jet is AD's through the transforms to rounding.
+    #[test]
+    fn transformed_grids_match_forward_ad() {
+        let (bmin, bmax) = (
+            glam::Vec3::new(-1.0, -0.5, -1.5),
+            glam::Vec3::new(1.0, 1.0, 0.5),
+        );
+        let inner = Sdf::transform(
+            grid([7, 6, 8], bmin, bmax, 5),
+            [0.5, -0.25, 2.0],
+            glam::Vec3::new(0.0, 1.0, 0.0),
+            -20.0,
+            0.5,
+        );
+        let node = Sdf::transform(
+            Sdf::named("blob", inner),
+            [40.0, -25.0, 10.0],
+            glam::Vec3::new(1.0, 2.0, 3.0),
+            37.0,
+            1.7,
+        );
+        let mut rng = crate::sampler::Sampler::new(1, 0, 3, 0);
+        let frame = |node: &Sdf| match node {
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                trig,
+                ..
+            } => crate::sdf::Similarity::primal(translate, *axis, angle, *trig, scale),
+            _ => unreachable!("a transform"),
+        };
+        let Sdf::Transform { child: named, .. } = &node else {
+            unreachable!()
+        };
+        let Sdf::Named { child: inner, .. } = named.as_ref() else {
+            unreachable!()
+        };
+        let (outer, inner) = (frame(&node), frame(inner));
+        // The grid's box seen from outside both transforms: its corners mapped out.
+        let corner = |k: usize| -> glam::Vec3 {
+            let c = glam::Vec3::new(
+                if k & 1 == 0 { bmin.x } else { bmax.x },
+                if k & 2 == 0 { bmin.y } else { bmax.y },
+                if k & 4 == 0 { bmin.z } else { bmax.z },
+            );
+            let mid: glam::Vec3 = inner.from_child_point(c.into()).into();
+            outer.from_child_point(mid.into()).into()
+        };
+        let (mut jets, mut worst_g, mut worst_h) = (0, 0.0f32, 0.0f32);
+        for _ in 0..3000 {
+            // A point between two random corners: inside the (convex) mapped box.
+            let (a, b) = (
+                corner((rng.next_1d() * 8.0) as usize % 8),
+                corner((rng.next_1d() * 8.0) as usize % 8),
+            );
+            let p = a
+                .lerp(b, rng.next_1d())
+                .lerp(corner(0).lerp(corner(7), 0.5), 0.2);
+            let Some((v, g, h)) = node.grid_jet::<true>(p) else {
+                continue;
+            };
+            jets += 1;
+            let (va, ga, ha) = node.ad_hessian_as::<false>(p);
+            assert!(
+                (v - va).abs() <= 1e-5 * (1.0 + va.abs()),
+                "value at {p}: {v} vs {va}"
+            );
+            assert_eq!(node.gradient(p), g, "first-order path at {p}");
+            worst_g = worst_g.max((g - ga).abs().max_element() / (1.0 + ga.abs().max_element()));
+            let dh = (h - ha)
+                .to_cols_array()
+                .map(f32::abs)
+                .into_iter()
+                .fold(0.0, f32::max);
+            worst_h = worst_h.max(
+                dh / (1.0
+                    + ha.to_cols_array()
+                        .map(f32::abs)
+                        .into_iter()
+                        .fold(0.0, f32::max)),
+            );
+        }
+        assert!(jets > 1000, "only {jets} points inside the grid's box");
+        assert!(worst_g < 1e-5, "gradient off by {worst_g} relative");
+        assert!(worst_h < 1e-5, "Hessian off by {worst_h} relative");
     }
 
     /// Outside the box there is no jet (the field adds the distance to the box there).

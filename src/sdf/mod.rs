@@ -355,8 +355,8 @@ impl Sdf {
     }
 
     /// `∇φ(p)` (not normalised), by forward-mode AD ([`DualVec3`]), with analytic fast paths for the
-    /// sphere, the box and a grid inside its box. Zero (never NaN) where `φ` is not differentiable in a way `safe_sqrt` guards,
-    /// e.g. at a sphere's centre.
+    /// sphere, the box and a grid inside its box. Zero (never NaN) where `φ` is not differentiable in a
+    /// way `safe_sqrt` guards, e.g. at a sphere's centre.
     pub fn gradient(&self, p: glam::Vec3) -> glam::Vec3 {
         match self {
             Sdf::Sphere { center, .. } => {
@@ -368,12 +368,7 @@ impl Sdf {
                 half_size,
                 rounding,
             } => box_gradient(p - center.value(), half_size.value(), rounding.value, false),
-            Sdf::Grid {
-                data,
-                bbox_min,
-                bbox_max,
-                ..
-            } => match grid_jet::jet::<false>(data, *bbox_min, *bbox_max, p) {
+            Sdf::Grid { .. } | Sdf::Transform { .. } => match self.grid_jet::<false>(p) {
                 Some((_, g, _)) => g,
                 None => self.ad_gradient(p),
             },
@@ -430,7 +425,7 @@ impl Sdf {
     }
 
     fn hessian_as<const FACES: bool>(&self, p: glam::Vec3) -> (f32, glam::Vec3, glam::Mat3) {
-        if let Some(jet) = self.grid_jet(p) {
+        if let Some(jet) = self.grid_jet::<true>(p) {
             return jet;
         }
         self.ad_hessian_as::<FACES>(p)
@@ -454,9 +449,10 @@ impl Sdf {
         (v.re, g, h)
     }
 
-    /// A grid's (or a named grid's) value, gradient and Hessian from its taps ([`grid_jet`]), inside
-    /// its box; `None` elsewhere and for every other node.
-    fn grid_jet(&self, p: glam::Vec3) -> Option<(f32, glam::Vec3, glam::Mat3)> {
+    /// The value, gradient and, with `SECOND`, Hessian (zero without) of a grid under names and
+    /// similarity transforms from the grid's taps ([`grid_jet`]), inside the grid's box; `None`
+    /// elsewhere and for every other node.
+    fn grid_jet<const SECOND: bool>(&self, p: glam::Vec3) -> Option<(f32, glam::Vec3, glam::Mat3)> {
         match self {
             Sdf::Grid {
                 data,
@@ -464,9 +460,35 @@ impl Sdf {
                 bbox_max,
                 level,
                 ..
-            } => grid_jet::jet::<true>(data, *bbox_min, *bbox_max, p)
+            } => grid_jet::jet::<SECOND>(data, *bbox_min, *bbox_max, p)
                 .map(|(v, g, h)| (v - level.value, g, h)),
-            Sdf::Named { child, .. } => child.grid_jet(p),
+            Sdf::Named { child, .. } => child.grid_jet::<SECOND>(p),
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                trig,
+                child,
+            } => {
+                // φ(x) = s φ_c(R⁻¹(x − t)/s): ∇φ = R ∇φ_c and H = R H_c Rᵀ / s.
+                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
+                let q: glam::Vec3 = frame.to_child_point(p.into()).into();
+                let (v, g, h) = child.grid_jet::<SECOND>(q)?;
+                let rotate =
+                    |v: glam::Vec3| -> glam::Vec3 { frame.from_child_gradient(v.into()).into() };
+                let h = if SECOND {
+                    let r = glam::Mat3::from_cols(
+                        rotate(glam::Vec3::X),
+                        rotate(glam::Vec3::Y),
+                        rotate(glam::Vec3::Z),
+                    );
+                    r * h * r.transpose() * frame.to_child_length(1.0)
+                } else {
+                    h
+                };
+                Some((frame.from_child_length(v), rotate(g), h))
+            }
             _ => None,
         }
     }
