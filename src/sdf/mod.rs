@@ -463,6 +463,8 @@ impl Sdf {
             } => grid_jet::jet::<SECOND>(data, *bbox_min, *bbox_max, p)
                 .map(|(v, g, h)| (v - level.value, g, h)),
             Sdf::Named { child, .. } => child.grid_jet::<SECOND>(p),
+            // Checked first: mapping the point costs more than the walk, and the normal of every hit
+            // on a transformed primitive comes this way before falling back to AD.
             Sdf::Transform {
                 translate,
                 axis,
@@ -470,7 +472,7 @@ impl Sdf {
                 scale,
                 trig,
                 child,
-            } => {
+            } if child.is_placed_grid() => {
                 // φ(x) = s φ_c(R⁻¹(x − t)/s): ∇φ = R ∇φ_c and H = R H_c Rᵀ / s.
                 let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
                 let q: glam::Vec3 = frame.to_child_point(p.into()).into();
@@ -490,6 +492,15 @@ impl Sdf {
                 Some((frame.from_child_length(v), rotate(g), h))
             }
             _ => None,
+        }
+    }
+
+    /// Whether this node is a grid under names and transforms only (what [`Sdf::grid_jet`] handles).
+    fn is_placed_grid(&self) -> bool {
+        match self {
+            Sdf::Grid { .. } => true,
+            Sdf::Named { child, .. } | Sdf::Transform { child, .. } => child.is_placed_grid(),
+            _ => false,
         }
     }
 
