@@ -42,7 +42,7 @@ fn plain_settings() -> Settings {
         learning_rate_grids: 0.0,
         learning_rate_params: 0.0,
         learning_rate_decay: Decay::None,
-        learning_rate_resolution: false,
+        learning_rate_resolution: 0.0,
         learning_rate_warmup: 0,
         adam: AdamOptions::default(),
         ema: 0.0,
@@ -325,4 +325,36 @@ fn image_scale_defaults_to_auto_only_for_sdf_grids() {
         let d = divisors(&s.image_scale, &cfg.scene, &cfg.views, &s.grids, stages).unwrap();
         assert_eq!(d, expected, "{name}");
     }
+}
+
+/// `learning_rate_resolution`: absent or `true` is the default power 2, `false` is 0, a number is
+/// itself (the race's `opt.json` with each value, its paths made absolute).
+#[test]
+fn learning_rate_resolution_takes_a_power() {
+    use implicit_psdr::optimize::config::{DEFAULT_LEARNING_RATE_RESOLUTION, OptimizeConfig};
+    let race = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse/race");
+    let text = std::fs::read_to_string(race.join("opt.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["scene"] = race.join("start.json").to_str().unwrap().into();
+    json["target"]["scene"] = race.join("target.json").to_str().unwrap().into();
+    let dir = std::env::temp_dir().join(format!("psdr-optimize-power-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    assert_eq!(DEFAULT_LEARNING_RATE_RESOLUTION, 2.0);
+    for (value, expected) in [
+        (None, 2.0),
+        (Some(serde_json::json!(true)), 2.0),
+        (Some(serde_json::json!(false)), 0.0),
+        (Some(serde_json::json!(1)), 1.0),
+        (Some(serde_json::json!(0.5)), 0.5),
+    ] {
+        let mut j = json.clone();
+        if let Some(v) = &value {
+            j["learning_rate_resolution"] = v.clone();
+        }
+        let path = dir.join("opt.json");
+        std::fs::write(&path, serde_json::to_string(&j).unwrap()).unwrap();
+        let cfg = OptimizeConfig::load(&path).unwrap();
+        assert_eq!(cfg.settings.learning_rate_resolution, expected, "{value:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -29,8 +29,9 @@ pub const DEFAULT_DECAY: Decay = Decay::Cosine {
 };
 /// The fraction of the learning rate left at the last iteration when `learning_rate_final` is absent.
 pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
-/// Whether grid steps follow the lattice spacing when `learning_rate_resolution` is absent.
-pub const DEFAULT_LEARNING_RATE_RESOLUTION: bool = true;
+/// The power of the lattice spacing that grid steps follow when `learning_rate_resolution` is absent
+/// or `true` ([`super::schedule::resolution_scale`]).
+pub const DEFAULT_LEARNING_RATE_RESOLUTION: f32 = 2.0;
 /// Iterations of the learning rate's ramp after each refinement when `learning_rate_warmup` is
 /// absent.
 pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;
@@ -203,14 +204,20 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
     let (learning_rate_grids, learning_rate_params) = learning_rates(&o)?;
     let learning_rate_decay = decay(&o)?;
     let learning_rate_resolution = match o.get("learning_rate_resolution") {
-        None => DEFAULT_LEARNING_RATE_RESOLUTION,
-        Some(Value::Bool(b)) => *b,
-        Some(v) => {
-            return Err(Error::field(
-                o.at("learning_rate_resolution"),
-                format!("expected true or false, got {}", describe(v)),
-            ));
-        }
+        None | Some(Value::Bool(true)) => DEFAULT_LEARNING_RATE_RESOLUTION,
+        Some(Value::Bool(false)) => 0.0,
+        Some(v) => match v.as_f64() {
+            Some(p) if (0.0..=8.0).contains(&p) => p as f32,
+            _ => {
+                return Err(Error::field(
+                    o.at("learning_rate_resolution"),
+                    format!(
+                        "expected true, false or a power in [0, 8], got {}",
+                        describe(v)
+                    ),
+                ));
+            }
+        },
     };
     let learning_rate_warmup = o
         .opt_int("learning_rate_warmup", 0, u32::MAX as u64)?

@@ -69,9 +69,10 @@ pub struct Settings {
     pub learning_rate_params: f32,
     /// How both step sizes decay over the run.
     pub learning_rate_decay: Decay,
-    /// Whether a grid's step size follows its lattice spacing after refinements
-    /// ([`schedule::resolution_scale`]: half the starting rate at `2n − 1`, a quarter at `4n − 3`).
-    pub learning_rate_resolution: bool,
+    /// The power `p` of the lattice spacing that a grid's step size follows after refinements: the
+    /// rate times `((n₀ − 1) / (n − 1))ᵖ` ([`schedule::resolution_scale`]; with `p` = 2, a quarter of
+    /// the starting rate at `2n − 1`, a sixteenth at `4n − 3`); 0 for none.
+    pub learning_rate_resolution: f32,
     /// Iterations `W` over which every step size ramps up after a refinement (`upsample_at`), which
     /// restarts Adam: the `k`-th iteration after it (from 0) has `min(1, (k + 1) / W)` of the rate
     /// ([`schedule::warmup`]); 0 for none.
@@ -359,12 +360,12 @@ impl Optimization {
         let mut rates = vec![s.learning_rate_params * decay; self.layout.params.len()];
         for (block, _) in &self.layout.grids {
             let mut rate = s.learning_rate_grids * decay;
-            if s.learning_rate_resolution
+            if s.learning_rate_resolution != 0.0
                 && block.kind == BlockKind::Grid
                 && let Some((_, start)) = self.start_dims.iter().find(|(n, _)| *n == block.node)
             {
                 let dims = self.scene.grid_values(&block.node)?.dims;
-                rate *= schedule::resolution_scale(*start, dims);
+                rate *= schedule::resolution_scale(*start, dims, s.learning_rate_resolution);
             }
             rates.extend(std::iter::repeat_n(rate, block.len()));
         }
