@@ -327,7 +327,7 @@ fn image_scale_defaults_to_auto_only_for_sdf_grids() {
     }
 }
 
-/// `learning_rate_resolution`: absent or `true` is the default power 2, `false` is 0, a number is
+/// `learning_rate_resolution`: absent or `true` is the default power 1, `false` is 0, a number is
 /// itself (the race's `opt.json` with each value, its paths made absolute).
 #[test]
 fn learning_rate_resolution_takes_a_power() {
@@ -339,12 +339,12 @@ fn learning_rate_resolution_takes_a_power() {
     json["target"]["scene"] = race.join("target.json").to_str().unwrap().into();
     let dir = std::env::temp_dir().join(format!("psdr-optimize-power-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    assert_eq!(DEFAULT_LEARNING_RATE_RESOLUTION, 2.0);
+    assert_eq!(DEFAULT_LEARNING_RATE_RESOLUTION, 1.0);
     for (value, expected) in [
-        (None, 2.0),
-        (Some(serde_json::json!(true)), 2.0),
+        (None, 1.0),
+        (Some(serde_json::json!(true)), 1.0),
         (Some(serde_json::json!(false)), 0.0),
-        (Some(serde_json::json!(1)), 1.0),
+        (Some(serde_json::json!(2)), 2.0),
         (Some(serde_json::json!(0.5)), 0.5),
     ] {
         let mut j = json.clone();

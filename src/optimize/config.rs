@@ -31,7 +31,7 @@ pub const DEFAULT_DECAY: Decay = Decay::Cosine {
 pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
 /// The power of the lattice spacing that grid steps follow when `learning_rate_resolution` is absent
 /// or `true` ([`super::schedule::resolution_scale`]).
-pub const DEFAULT_LEARNING_RATE_RESOLUTION: f32 = 2.0;
+pub const DEFAULT_LEARNING_RATE_RESOLUTION: f32 = 1.0;
 /// Iterations of the learning rate's ramp after each refinement when `learning_rate_warmup` is
 /// absent.
 pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;

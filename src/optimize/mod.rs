@@ -70,8 +70,8 @@ pub struct Settings {
     /// How both step sizes decay over the run.
     pub learning_rate_decay: Decay,
     /// The power `p` of the lattice spacing that a grid's step size follows after refinements: the
-    /// rate times `((n₀ − 1) / (n − 1))ᵖ` ([`schedule::resolution_scale`]; with `p` = 2, a quarter of
-    /// the starting rate at `2n − 1`, a sixteenth at `4n − 3`); 0 for none.
+    /// rate times `((n₀ − 1) / (n − 1))ᵖ` ([`schedule::resolution_scale`]; with `p` = 1, half the
+    /// starting rate at `2n − 1`, a quarter at `4n − 3`); 0 for none.
     pub learning_rate_resolution: f32,
     /// Iterations `W` over which every step size ramps up after a refinement (`upsample_at`), which
     /// restarts Adam: the `k`-th iteration after it (from 0) has `min(1, (k + 1) / W)` of the rate

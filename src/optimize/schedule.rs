@@ -59,12 +59,11 @@ pub fn warmup(index: u32, upsample_at: &[u32], iterations: u32) -> f32 {
 /// spacing relative to its spacing at the start of the run, `((n₀ − 1) / (n − 1))ᵖ` along its longest
 /// axis (`n₀` points at the start, `n` now).
 ///
-/// With `p` = 1 a step stays the same fraction of a cell after each refinement `n → 2n − 1`. The
-/// default `p` = 2 also makes it a smaller fraction: a value of a finer lattice shapes fewer pixels,
-/// so its gradient's signal falls faster than its noise (about as the spacing), and Adam, which moves
-/// every noise-dominated value by about the rate at each step, needs a rate that falls with it to
-/// keep the surface's jitter a fixed fraction of a cell. docs/inverse-rendering.md has the
-/// measurement.
+/// With `p` = 1 (the default) a step stays the same fraction of a cell after each refinement
+/// `n → 2n − 1`. A larger `p` makes it a smaller fraction, which suits a shape the coarse stage has
+/// already found (a finer value's gradient is noisier relative to its signal, and Adam moves a
+/// noise-dominated value by about the rate) and slows one whose detail forms at the finer stages;
+/// docs/inverse-rendering.md has both measurements.
 pub fn resolution_scale(start_dims: [usize; 3], dims: [usize; 3], power: f32) -> f32 {
     let longest = |d: [usize; 3]| d.iter().copied().max().unwrap_or(2).max(2) - 1;
     (longest(start_dims) as f32 / longest(dims) as f32).powf(power)
