@@ -85,12 +85,11 @@ impl Sdf {
                 axis,
                 angle,
                 scale,
-                trig,
-                child,
+                ..
             } => {
                 // Into the child's frame with the primal transform, carried there, and back out with
                 // the lifted one.
-                let primal = Similarity::primal(translate, *axis, angle, *trig, scale);
+                let (primal, child) = self.frame()?;
                 let moved = child.carried(primal.constant::<S>().to_child_point(q))?;
                 Some(
                     Similarity::<S>::lifted(translate, *axis, angle, scale).from_child_point(moved),

@@ -338,15 +338,8 @@ struct Found {
 fn collect(node: &Sdf, walk: &mut Walk, out: &mut Found) {
     match node {
         Sdf::Named { child, .. } => collect(child, walk, out),
-        Sdf::Transform {
-            translate,
-            axis,
-            angle,
-            scale,
-            trig,
-            child,
-        } => {
-            (walk.place.0).push(Similarity::primal(translate, *axis, angle, *trig, scale));
+        Sdf::Transform { .. } if let Some((frame, child)) = node.frame() => {
+            walk.place.0.push(frame);
             collect(child, walk, out);
             walk.place.0.pop();
         }

@@ -444,17 +444,10 @@ impl Sdf {
                 let grow = (n - 1.0) * k.value.max(0.0) * super::csg::SMIN_MAX_LOWERING;
                 Some(if b.is_empty() { b } else { b.expanded(grow) })
             }
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                child,
-            } => Some(
-                super::Similarity::primal(translate, *axis, angle, *trig, scale)
-                    .from_child_box(&child.cull_bounds()?),
-            ),
+            Sdf::Transform { .. } => {
+                let (frame, child) = self.frame()?;
+                Some(frame.from_child_box(&child.cull_bounds()?))
+            }
             Sdf::Grid {
                 data,
                 bbox_min,

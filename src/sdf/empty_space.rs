@@ -14,7 +14,7 @@
 //! whenever the spline stays above the level on the box's faces; otherwise no skipping). Parameters that
 //! change the grid, its level or its transforms rebuild it with the shape.
 
-use super::{Sdf, Similarity, grid};
+use super::{Sdf, grid};
 use crate::math::{Aabb, Ray};
 use std::cmp::Ordering;
 
@@ -74,16 +74,9 @@ impl EmptySpace {
     pub fn of(sdf: &Sdf) -> Option<Self> {
         match sdf {
             Sdf::Named { child, .. } => Self::of(child),
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                child,
-            } => {
+            Sdf::Transform { .. } => {
+                let (frame, child) = sdf.frame()?;
                 let inner = Self::of(child)?;
-                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
                 let s = frame.scale();
                 if !(s > 0.0 && s.is_finite()) {
                     return None;

@@ -236,24 +236,11 @@ mod tests {
             1.7,
         );
         let mut rng = crate::sampler::Sampler::new(1, 0, 3, 0);
-        let frame = |node: &Sdf| match node {
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                ..
-            } => crate::sdf::Similarity::primal(translate, *axis, angle, *trig, scale),
-            _ => unreachable!("a transform"),
-        };
-        let Sdf::Transform { child: named, .. } = &node else {
+        let (outer, named) = node.frame().expect("a transform");
+        let Sdf::Named { child: inner, .. } = named else {
             unreachable!()
         };
-        let Sdf::Named { child: inner, .. } = named.as_ref() else {
-            unreachable!()
-        };
-        let (outer, inner) = (frame(&node), frame(inner));
+        let (inner, _) = inner.frame().expect("a transform");
         // The grid's box seen from outside both transforms: its corners mapped out.
         let corner = |k: usize| -> glam::Vec3 {
             let c = glam::Vec3::new(

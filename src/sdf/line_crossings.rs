@@ -25,7 +25,7 @@
 //! - **transform** `x = T + s R p`: the line mapped into the child's frame (`o' = R⁻¹(o − T)/s`,
 //!   `d' = R⁻¹ d / s`: the same parameter `t`; [`super::Similarity::to_child_ray`]).
 
-use super::{Sdf, Similarity};
+use super::Sdf;
 use crate::math::Ray;
 
 /// The crossings of a whole line `o + t d` (`t ∈ ℝ`) with a surface.
@@ -97,15 +97,8 @@ impl Sdf {
                 half_size,
                 rounding,
             } => box_crossings(o - center.value(), d, half_size.value(), rounding.value)?,
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                child,
-            } => {
-                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
+            Sdf::Transform { .. } => {
+                let (frame, child) = self.frame()?;
                 child.line_crossings(&frame.to_child_ray(ray))?
             }
             Sdf::Cylinder {

@@ -465,16 +465,9 @@ impl Sdf {
             Sdf::Named { child, .. } => child.grid_jet::<SECOND>(p),
             // Checked first: mapping the point costs more than the walk, and the normal of every hit
             // on a transformed primitive comes this way before falling back to AD.
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                child,
-            } if child.is_placed_grid() => {
+            Sdf::Transform { child, .. } if child.is_placed_grid() => {
                 // φ(x) = s φ_c(R⁻¹(x − t)/s): ∇φ = R ∇φ_c and H = R H_c Rᵀ / s.
-                let frame = Similarity::primal(translate, *axis, angle, *trig, scale);
+                let (frame, child) = self.frame()?;
                 let q: glam::Vec3 = frame.to_child_point(p.into()).into();
                 let (v, g, h) = child.grid_jet::<SECOND>(q)?;
                 let rotate =
@@ -555,15 +548,10 @@ impl Sdf {
             Sdf::Intersection(children) => csg::intersection_bounds(children),
             Sdf::Difference(children) => children.first().map_or(Aabb::EMPTY, Sdf::bounds),
             Sdf::SmoothUnion { children, k } => csg::smooth_union_bounds(children, k.value),
-            Sdf::Transform {
-                translate,
-                axis,
-                angle,
-                scale,
-                trig,
-                child,
-            } => Similarity::primal(translate, *axis, angle, *trig, scale)
-                .from_child_box(&child.bounds()),
+            Sdf::Transform { .. } => {
+                let (frame, child) = self.frame().expect("a transform has a frame");
+                frame.from_child_box(&child.bounds())
+            }
             Sdf::Grid {
                 data,
                 bbox_min,

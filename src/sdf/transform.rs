@@ -421,6 +421,30 @@ fn map_box(
 }
 
 impl Sdf {
+    /// A transform node's change of frame and its child; `None` for any other node (names are not
+    /// looked through).
+    ///
+    /// The similarity is the node's [`Similarity::primal`] (its parameter values, without
+    /// derivatives): its `from_child_*` methods map a point `p` of the child's frame out to
+    /// `x = t + s R p` in this node's, its `to_child_*` methods map `x` back to `R⁻¹(x − t)/s`.
+    #[inline]
+    pub fn frame(&self) -> Option<(Similarity, &Sdf)> {
+        match self {
+            Sdf::Transform {
+                translate,
+                axis,
+                angle,
+                scale,
+                trig,
+                child,
+            } => Some((
+                Similarity::primal(translate, *axis, angle, *trig, scale),
+                child,
+            )),
+            _ => None,
+        }
+    }
+
     /// Point `p` of this node's frame in the frame of the chain of transform nodes at the top of the
     /// tree (names skipped): through each transform's inverse, down to the first node that is neither
     /// (`p` itself when the tree has no transform at its top). Volume textures are read there.
