@@ -539,12 +539,12 @@ fn bad_inputs_fail_with_one_line_naming_the_field_and_touch_nothing() {
         (
             "negative resolution power",
             |o| o["learning_rate_resolution"] = json!(-1),
-            "opt.json: learning_rate_resolution: expected true, false or a power in [0, 8], got number -1",
+            "opt.json: learning_rate_resolution: expected \"auto\", true, false or a power in [0, 8], got number -1",
         ),
         (
             "resolution power as a string",
             |o| o["learning_rate_resolution"] = json!("2"),
-            "opt.json: learning_rate_resolution: expected true, false or a power in [0, 8], got string \"2\"",
+            "opt.json: learning_rate_resolution: expected \"auto\", true, false or a power in [0, 8], got string \"2\"",
         ),
         (
             "orbit without views",

@@ -3,7 +3,8 @@
 
 use implicit_psdr::integrator::Loss;
 use implicit_psdr::optimize::{
-    AdamOptions, Decay, ImageScale, Optimization, Settings, Terms, View, render_targets,
+    AdamOptions, Decay, ImageScale, Optimization, ResolutionPower, Settings, Terms, View,
+    render_targets,
 };
 use implicit_psdr::scene::{Scene, parse};
 
@@ -42,7 +43,7 @@ fn plain_settings() -> Settings {
         learning_rate_grids: 0.0,
         learning_rate_params: 0.0,
         learning_rate_decay: Decay::None,
-        learning_rate_resolution: 0.0,
+        learning_rate_resolution: ResolutionPower::Fixed(0.0),
         learning_rate_warmup: 0,
         adam: AdamOptions::default(),
         ema: 0.0,
@@ -327,8 +328,9 @@ fn image_scale_defaults_to_auto_only_for_sdf_grids() {
     }
 }
 
-/// `learning_rate_resolution`: absent or `true` is the default power 1, `false` is 0, a number is
-/// itself (the race's `opt.json` with each value, its paths made absolute).
+/// `learning_rate_resolution`: absent or `true` is the default power 1, `"auto"` chooses per
+/// refinement, `false` is 0, a number itself (the race's `opt.json` with each value, its paths made
+/// absolute).
 #[test]
 fn learning_rate_resolution_takes_a_power() {
     use implicit_psdr::optimize::config::{DEFAULT_LEARNING_RATE_RESOLUTION, OptimizeConfig};
@@ -339,13 +341,17 @@ fn learning_rate_resolution_takes_a_power() {
     json["target"]["scene"] = race.join("target.json").to_str().unwrap().into();
     let dir = std::env::temp_dir().join(format!("psdr-optimize-power-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    assert_eq!(DEFAULT_LEARNING_RATE_RESOLUTION, 1.0);
+    assert_eq!(
+        DEFAULT_LEARNING_RATE_RESOLUTION,
+        ResolutionPower::Fixed(1.0)
+    );
     for (value, expected) in [
-        (None, 1.0),
-        (Some(serde_json::json!(true)), 1.0),
-        (Some(serde_json::json!(false)), 0.0),
-        (Some(serde_json::json!(2)), 2.0),
-        (Some(serde_json::json!(0.5)), 0.5),
+        (None, ResolutionPower::Fixed(1.0)),
+        (Some(serde_json::json!("auto")), ResolutionPower::Auto),
+        (Some(serde_json::json!(true)), ResolutionPower::Fixed(1.0)),
+        (Some(serde_json::json!(false)), ResolutionPower::Fixed(0.0)),
+        (Some(serde_json::json!(2)), ResolutionPower::Fixed(2.0)),
+        (Some(serde_json::json!(0.5)), ResolutionPower::Fixed(0.5)),
     ] {
         let mut j = json.clone();
         if let Some(v) = &value {
@@ -357,4 +363,50 @@ fn learning_rate_resolution_takes_a_power() {
         assert_eq!(cfg.settings.learning_rate_resolution, expected, "{value:?}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs the 16³, 24×24, 4-view problem towards `target` (the start itself or the blended spheres)
+/// for 10 iterations, then refines: the refinement that `learning_rate_resolution` `"auto"` made.
+fn refinement_towards(to_itself: bool) -> implicit_psdr::optimize::Refinement {
+    use implicit_psdr::optimize::orbit;
+    let dir = std::env::temp_dir().join(format!(
+        "psdr-optimize-auto-{}-{to_itself}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (start, target) = grid_scenes(&dir, 24);
+    let target = if to_itself { start.clone() } else { target };
+    let views = orbit(4, 3.5, &[1.5], glam::Vec3::ZERO, 40.0);
+    let targets = render_targets(&target, &views, 64, 500).unwrap();
+    let settings = Settings {
+        grids: vec!["blob".into()],
+        learning_rate_grids: 0.02,
+        learning_rate_resolution: ResolutionPower::Auto,
+        seed: 3,
+        upsample_at: vec![10],
+        ..plain_settings()
+    };
+    let mut opt = Optimization::new(start, views, targets, settings).unwrap();
+    for _ in 0..11 {
+        opt.step().unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(opt.refinements().len(), 1);
+    opt.refinements()[0].clone()
+}
+
+/// `learning_rate_resolution` `"auto"`: a grid whose target is its own start has only noise in its
+/// gradients, so its stage counts as converged and the refined grid's rate follows the spacing's
+/// square (a quarter); a grid still moving towards a different shape keeps the first power (a half).
+#[test]
+fn automatic_resolution_power_follows_the_stage_convergence() {
+    let converged = refinement_towards(true);
+    let moving = refinement_towards(false);
+    println!("converged: {converged:?}\nmoving: {moving:?}");
+    for r in [&converged, &moving] {
+        assert_eq!((r.iteration, r.node.as_str()), (10, "blob"));
+        assert!(r.signal_ratio.is_some_and(f64::is_finite));
+    }
+    assert_eq!((converged.power, converged.rate_scale), (2.0, 0.25));
+    assert_eq!((moving.power, moving.rate_scale), (1.0, 0.5));
 }

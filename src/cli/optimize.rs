@@ -97,6 +97,22 @@ fn summary(cfg: &OptimizeConfig, outcome: &Outcome, out: &Path) -> Result<()> {
             mesh
         )?;
     }
+    for r in &outcome.refinements {
+        let why = match r.signal_ratio {
+            Some(signal) => format!(
+                "Adam's signal ratio {signal:.3}, {:.3} for noise alone",
+                r.noise_ratio
+            ),
+            None => "no step before it".to_string(),
+        };
+        outln!(
+            "  {} refined before iteration {}: its steps x{} (the lattice spacing's power {}; {why})",
+            r.node,
+            r.iteration,
+            r.rate_scale,
+            r.power
+        )?;
+    }
     let rows = &outcome.rows;
     if let Some(last) = rows.last()
         && !last.shapes.is_empty()

@@ -5,7 +5,7 @@
 //! the scenes load, the views are valid cameras, the target images exist, are readable and have the
 //! scene's image size, and the parameters and grids to optimise exist.
 
-use super::{AdamOptions, Decay, Settings, Terms, View, orbit};
+use super::{AdamOptions, Decay, ResolutionPower, Settings, Terms, View, orbit};
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::integrator::Loss;
@@ -29,9 +29,9 @@ pub const DEFAULT_DECAY: Decay = Decay::Cosine {
 };
 /// The fraction of the learning rate left at the last iteration when `learning_rate_final` is absent.
 pub const DEFAULT_LEARNING_RATE_FINAL: f32 = 0.1;
-/// The power of the lattice spacing that grid steps follow when `learning_rate_resolution` is absent
-/// or `true` ([`super::schedule::resolution_scale`]).
-pub const DEFAULT_LEARNING_RATE_RESOLUTION: f32 = 1.0;
+/// How grid steps follow the lattice spacing when `learning_rate_resolution` is absent or `true`
+/// ([`ResolutionPower`]): the power 1.
+pub const DEFAULT_LEARNING_RATE_RESOLUTION: ResolutionPower = ResolutionPower::Fixed(1.0);
 /// Iterations of the learning rate's ramp after each refinement when `learning_rate_warmup` is
 /// absent.
 pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;
@@ -204,15 +204,17 @@ fn parse(root: &Value, base_dir: &Path, path: &Path) -> Result<OptimizeConfig> {
     let (learning_rate_grids, learning_rate_params) = learning_rates(&o)?;
     let learning_rate_decay = decay(&o)?;
     let learning_rate_resolution = match o.get("learning_rate_resolution") {
-        None | Some(Value::Bool(true)) => DEFAULT_LEARNING_RATE_RESOLUTION,
-        Some(Value::Bool(false)) => 0.0,
+        None => DEFAULT_LEARNING_RATE_RESOLUTION,
+        Some(Value::String(s)) if s == "auto" => ResolutionPower::Auto,
+        Some(Value::Bool(true)) => DEFAULT_LEARNING_RATE_RESOLUTION,
+        Some(Value::Bool(false)) => ResolutionPower::Fixed(0.0),
         Some(v) => match v.as_f64() {
-            Some(p) if (0.0..=8.0).contains(&p) => p as f32,
+            Some(p) if (0.0..=8.0).contains(&p) => ResolutionPower::Fixed(p as f32),
             _ => {
                 return Err(Error::field(
                     o.at("learning_rate_resolution"),
                     format!(
-                        "expected true, false or a power in [0, 8], got {}",
+                        "expected \"auto\", true, false or a power in [0, 8], got {}",
                         describe(v)
                     ),
                 ));

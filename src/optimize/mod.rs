@@ -25,7 +25,7 @@ pub use adam::{Adam, AdamOptions};
 pub use progress::Row;
 pub use resolution::ImageScale;
 pub use run::{Observer, Outcome, Status, run};
-pub use schedule::{Decay, Ema};
+pub use schedule::{Decay, Ema, ResolutionPower};
 pub use views::{View, orbit};
 
 use crate::error::{Error, Result};
@@ -69,10 +69,10 @@ pub struct Settings {
     pub learning_rate_params: f32,
     /// How both step sizes decay over the run.
     pub learning_rate_decay: Decay,
-    /// The power `p` of the lattice spacing that a grid's step size follows after refinements: the
-    /// rate times `((n₀ − 1) / (n − 1))ᵖ` ([`schedule::resolution_scale`]; with `p` = 1, half the
-    /// starting rate at `2n − 1`, a quarter at `4n − 3`); 0 for none.
-    pub learning_rate_resolution: f32,
+    /// How a grid's step size follows its lattice spacing after refinements: each refinement `n → n'`
+    /// multiplies it by `((n − 1) / (n' − 1))ᵖ`, `p` fixed or chosen per refinement
+    /// ([`schedule::ResolutionPower`]).
+    pub learning_rate_resolution: ResolutionPower,
     /// Iterations `W` over which every step size ramps up after a refinement (`upsample_at`), which
     /// restarts Adam: the `k`-th iteration after it (from 0) has `min(1, (k + 1) / W)` of the rate
     /// ([`schedule::warmup`]); 0 for none.
@@ -136,6 +136,25 @@ pub struct StageSeconds {
     pub grid_edits: f64,
 }
 
+/// One refinement of an optimised grid (`upsample_at`) and the step-size power it took
+/// ([`Settings::learning_rate_resolution`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refinement {
+    /// The iteration it came before (0-based).
+    pub iteration: u32,
+    /// The grid's node.
+    pub node: String,
+    /// Adam's signal ratio over the grid's values at the last step of the stage that ended
+    /// ([`Adam::signal_ratio`]); `None` if the stage took no step.
+    pub signal_ratio: Option<f64>,
+    /// What zero-mean noise would have given at that step ([`Adam::noise_ratio`]).
+    pub noise_ratio: f64,
+    /// The power of the lattice spacing taken.
+    pub power: f32,
+    /// The factor it put on the grid's rate.
+    pub rate_scale: f32,
+}
+
 /// An optimisation in progress: the scene, its views and their targets, and Adam's state.
 pub struct Optimization {
     /// The scene being optimised (its current parameter values).
@@ -150,8 +169,8 @@ pub struct Optimization {
     adam: Adam,
     /// The moving average of the values in layout order (`None` when `ema` is 0).
     ema: Option<Ema>,
-    /// The optimised grids' dimensions at the start (for [`Settings::learning_rate_resolution`]).
-    start_dims: Vec<(String, [usize; 3])>,
+    /// The refinements so far, in order ([`Settings::learning_rate_resolution`]).
+    refinements: Vec<Refinement>,
     /// The divisor of the film's width and height in each grid stage ([`Settings::image_scale`]).
     pub stage_divisors: Vec<u32>,
     /// The targets reduced by each divisor > 1 that a stage uses.
@@ -201,12 +220,6 @@ impl Optimization {
         let layout = GradientLayout::select(&scene, &settings.params, &settings.grids)?;
         let adam = Adam::with_options(layout.entries, settings.adam);
         let ema = (settings.ema > 0.0).then(|| Ema::new(layout.entries, settings.ema as f64));
-        let mut start_dims = Vec::new();
-        for (block, _) in &layout.grids {
-            if block.kind == BlockKind::Grid {
-                start_dims.push((block.node.clone(), scene.grid_values(&block.node)?.dims));
-            }
-        }
         let stage_divisors = resolution::divisors(
             &settings.image_scale,
             &scene,
@@ -229,7 +242,7 @@ impl Optimization {
             layout,
             adam,
             ema,
-            start_dims,
+            refinements: Vec::new(),
             stage_divisors,
             reduced_targets,
             done: 0,
@@ -345,6 +358,11 @@ impl Optimization {
         })
     }
 
+    /// The refinements done so far, in order: each grid's step-size power and what decided it.
+    pub fn refinements(&self) -> &[Refinement] {
+        &self.refinements
+    }
+
     /// The divisor of the film's width and height at iteration `index` (its grid stage's).
     pub fn divisor_at(&self, index: u32) -> u32 {
         let stage = resolution::stage_of(index, &self.settings.upsample_at);
@@ -359,14 +377,13 @@ impl Optimization {
             * schedule::warmup(index, &s.upsample_at, s.learning_rate_warmup);
         let mut rates = vec![s.learning_rate_params * decay; self.layout.params.len()];
         for (block, _) in &self.layout.grids {
-            let mut rate = s.learning_rate_grids * decay;
-            if s.learning_rate_resolution != 0.0
-                && block.kind == BlockKind::Grid
-                && let Some((_, start)) = self.start_dims.iter().find(|(n, _)| *n == block.node)
-            {
-                let dims = self.scene.grid_values(&block.node)?.dims;
-                rate *= schedule::resolution_scale(*start, dims, s.learning_rate_resolution);
-            }
+            let scale: f32 = self
+                .refinements
+                .iter()
+                .filter(|r| r.node == block.node)
+                .map(|r| r.rate_scale)
+                .product();
+            let rate = s.learning_rate_grids * decay * scale;
             rates.extend(std::iter::repeat_n(rate, block.len()));
         }
         Ok(rates)
@@ -446,10 +463,37 @@ impl Optimization {
             });
             result?;
         }
+        // The stage that ends: how far each grid's gradients were still a signal (before Adam restarts).
+        let signals: Vec<(String, Option<f64>)> = self
+            .layout
+            .grids
+            .iter()
+            .map(|(b, first)| {
+                (
+                    b.node.clone(),
+                    self.adam.signal_ratio(*first..*first + b.len()),
+                )
+            })
+            .collect();
         for node in &nodes {
             let mut data = (*self.scene.grid_values(node)?).clone();
             if upsample {
+                let before = data.dims;
                 data = data.refined();
+                let signal = signals.iter().find(|(n, _)| n == node).and_then(|s| s.1);
+                let noise = self.adam.noise_ratio();
+                let power = match self.settings.learning_rate_resolution {
+                    ResolutionPower::Fixed(p) => p,
+                    ResolutionPower::Auto => schedule::auto_power(signal, noise),
+                };
+                self.refinements.push(Refinement {
+                    iteration: index,
+                    node: node.clone(),
+                    signal_ratio: signal,
+                    noise_ratio: noise,
+                    power,
+                    rate_scale: schedule::refinement_scale(before, data.dims, power),
+                });
             }
             if redistance {
                 let [lo, hi] = self.scene.grid_box(node)?;

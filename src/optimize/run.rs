@@ -71,6 +71,8 @@ pub struct Outcome {
     pub written: Vec<String>,
     /// The scene at the optimised values.
     pub scene: Scene,
+    /// The grids' refinements (`upsample_at`) and the step-size power each took.
+    pub refinements: Vec<super::Refinement>,
 }
 
 /// Runs the optimisation `cfg`, writing its files in the folder `out` (created if missing) or nowhere
@@ -284,6 +286,7 @@ pub fn run(
         rows,
         seconds,
         written,
+        refinements: opt.refinements().to_vec(),
         scene: opt.scene,
     })
 }

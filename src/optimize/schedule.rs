@@ -55,18 +55,48 @@ pub fn warmup(index: u32, upsample_at: &[u32], iterations: u32) -> f32 {
     }
 }
 
-/// The factor of a grid's learning rate for its resolution: the power `p` of the grid's lattice
-/// spacing relative to its spacing at the start of the run, `((n₀ − 1) / (n − 1))ᵖ` along its longest
-/// axis (`n₀` points at the start, `n` now).
+/// How a grid's learning rate follows its lattice spacing as `upsample_at` refines it: each
+/// refinement `n → n'` points along the longest axis multiplies the grid's rate by
+/// `((n − 1) / (n' − 1))ᵖ` (a half per power for the usual `n' = 2n − 1`).
 ///
-/// With `p` = 1 (the default) a step stays the same fraction of a cell after each refinement
-/// `n → 2n − 1`. A larger `p` makes it a smaller fraction, which suits a shape the coarse stage has
-/// already found (a finer value's gradient is noisier relative to its signal, and Adam moves a
-/// noise-dominated value by about the rate) and slows one whose detail forms at the finer stages;
+/// With `p` = 1 a step stays the same fraction of a cell at every stage. A larger `p` makes it a
+/// smaller fraction, which suits a shape the coarser stage has already found (a finer value is seen
+/// by fewer pixels, so its gradient is noisier relative to its signal, and Adam moves a
+/// noise-dominated value by about the rate) and slows one whose detail still has far to move;
 /// docs/inverse-rendering.md has both measurements.
-pub fn resolution_scale(start_dims: [usize; 3], dims: [usize; 3], power: f32) -> f32 {
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum ResolutionPower {
+    /// The same power `p ≥ 0` at every refinement (0: the rate ignores the resolution).
+    Fixed(f32),
+    /// At each refinement, 2 if the stage that ends had converged and 1 if its shape was still
+    /// moving ([`auto_power`]).
+    Auto,
+}
+
+/// [`ResolutionPower::Auto`] judges a stage converged when Adam's signal ratio over the grid's values
+/// at its last step ([`super::Adam::signal_ratio`]) is at most this multiple of what zero-mean noise
+/// gives ([`super::Adam::noise_ratio`]).
+///
+/// On the race and the scanned bunny of docs/inverse-rendering.md, stages that had converged ended
+/// at 0.76–1.00 times the noise's ratio and stages whose shape still moved at 1.47–1.83 times it;
+/// 1.2 is near the geometric middle of the gap.
+pub const AUTO_CONVERGED_RATIO: f64 = 1.2;
+
+/// The power of the lattice spacing for a refinement under [`ResolutionPower::Auto`]: 2 when the
+/// stage that ends had converged (`signal ≤` [`AUTO_CONVERGED_RATIO`]` · noise`), else 1 (also when
+/// the stage took no step: `signal` is `None`).
+pub fn auto_power(signal: Option<f64>, noise: f64) -> f32 {
+    match signal {
+        Some(s) if s <= AUTO_CONVERGED_RATIO * noise => 2.0,
+        _ => 1.0,
+    }
+}
+
+/// The factor of a grid's learning rate for one refinement from `before` to `after` points per axis,
+/// with the spacing's power `power`: `((n − 1) / (n' − 1))ᵖ` along the longest axis.
+pub fn refinement_scale(before: [usize; 3], after: [usize; 3], power: f32) -> f32 {
     let longest = |d: [usize; 3]| d.iter().copied().max().unwrap_or(2).max(2) - 1;
-    (longest(start_dims) as f32 / longest(dims) as f32).powf(power)
+    (longest(before) as f32 / longest(after) as f32).powf(power)
 }
 
 /// The exponential moving average of a parameter vector, with a weight on the past that grows from 0
@@ -169,17 +199,29 @@ mod tests {
         close(cos.factor(500, 101), 0.1);
     }
 
-    /// Refinement halves the grid's spacing (a quarter twice), the factor is its power; a non-cubic grid
-    /// goes by its longest side.
+    /// Refinement halves the grid's spacing, the factor is its power; a non-cubic grid goes by its
+    /// longest side.
     #[test]
-    fn resolution_scales() {
-        assert_eq!(resolution_scale([16; 3], [16; 3], 1.0), 1.0);
-        assert_eq!(resolution_scale([16; 3], [31; 3], 1.0), 0.5);
-        assert_eq!(resolution_scale([16; 3], [61; 3], 1.0), 0.25);
-        assert_eq!(resolution_scale([9, 5, 3], [17, 9, 5], 1.0), 0.5);
-        assert_eq!(resolution_scale([16; 3], [31; 3], 2.0), 0.25);
-        assert_eq!(resolution_scale([16; 3], [61; 3], 2.0), 0.0625);
-        assert_eq!(resolution_scale([16; 3], [61; 3], 0.0), 1.0);
+    fn refinement_scales() {
+        assert_eq!(refinement_scale([16; 3], [16; 3], 1.0), 1.0);
+        assert_eq!(refinement_scale([16; 3], [31; 3], 1.0), 0.5);
+        assert_eq!(refinement_scale([31; 3], [61; 3], 1.0), 0.5);
+        assert_eq!(refinement_scale([9, 5, 3], [17, 9, 5], 1.0), 0.5);
+        assert_eq!(refinement_scale([16; 3], [31; 3], 2.0), 0.25);
+        assert_eq!(refinement_scale([16; 3], [31; 3], 0.0), 1.0);
+    }
+
+    /// The automatic power: 2 after a stage whose gradients were noise-like, 1 while they carried a
+    /// signal or when there were none.
+    #[test]
+    fn auto_power_follows_the_signal() {
+        let noise = 0.2;
+        assert_eq!(auto_power(Some(0.15), noise), 2.0);
+        assert_eq!(auto_power(Some(0.2), noise), 2.0);
+        assert_eq!(auto_power(Some(AUTO_CONVERGED_RATIO * noise), noise), 2.0);
+        assert_eq!(auto_power(Some(0.3), noise), 1.0);
+        assert_eq!(auto_power(Some(1.0), noise), 1.0);
+        assert_eq!(auto_power(None, noise), 1.0);
     }
 
     /// The average of a known sequence: the warm-up weights, then `β`; and its remapping.
