@@ -337,7 +337,7 @@ impl Optimization {
             }
         }
         let norm = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-        let rates = self.rates(index)?;
+        let rates = self.rates(index);
         let mut values = self.values()?;
         let proposed = self.adam.step(&values, &gradient, &rates);
         self.apply(&mut values, &proposed)?;
@@ -371,7 +371,7 @@ impl Optimization {
 
     /// The step size of every entry at iteration `index`: the named parameters' and the grids' rates
     /// times the decay's and the warm-up's factors, a grid's also times its resolution's scale.
-    fn rates(&self, index: u32) -> Result<Vec<f32>> {
+    fn rates(&self, index: u32) -> Vec<f32> {
         let s = &self.settings;
         let decay = s.learning_rate_decay.factor(index, s.iterations)
             * schedule::warmup(index, &s.upsample_at, s.learning_rate_warmup);
@@ -386,7 +386,7 @@ impl Optimization {
             let rate = s.learning_rate_grids * decay * scale;
             rates.extend(std::iter::repeat_n(rate, block.len()));
         }
-        Ok(rates)
+        rates
     }
 
     /// The scene at the moving average of the values (the run's result, and what its metrics
@@ -463,24 +463,15 @@ impl Optimization {
             });
             result?;
         }
-        // The stage that ends: how far each grid's gradients were still a signal (before Adam restarts).
-        let signals: Vec<(String, Option<f64>)> = self
-            .layout
-            .grids
-            .iter()
-            .map(|(b, first)| {
-                (
-                    b.node.clone(),
-                    self.adam.signal_ratio(*first..*first + b.len()),
-                )
-            })
-            .collect();
         for node in &nodes {
             let mut data = (*self.scene.grid_values(node)?).clone();
             if upsample {
                 let before = data.dims;
                 data = data.refined();
-                let signal = signals.iter().find(|(n, _)| n == node).and_then(|s| s.1);
+                // How far the stage that ends still moved the grid (Adam restarts after the loop).
+                let signal = (self.layout.grids.iter())
+                    .find(|(b, _)| b.node == *node)
+                    .and_then(|(b, first)| self.adam.signal_ratio(*first..*first + b.len()));
                 let noise = self.adam.noise_ratio();
                 let power = match self.settings.learning_rate_resolution {
                     ResolutionPower::Fixed(p) => p,
