@@ -9,11 +9,18 @@
 //! subdivided `(c_{−1} + c_0)/2`, so the refined spline is the same function over the whole box (and,
 //! its faces unchanged, outside it). Per axis `n → 2n − 1`.
 //!
-//! **Redistancing.** The spline is sampled at the lattice nodes; nodes next to a sign change get their
-//! distance from the spline's value and gradient (`φ/|∇φ|`, exact to first order); the others from
-//! the eikonal equation `|∇d| = 1` by fast sweeping (Zhao, "A fast sweeping method for eikonal
-//! equations", Math. Comp. 2005) with the Godunov upwind update for the three spacings; the sign of the
-//! samples is kept. The distances `d` are then turned into control points. Taken as they are, the
+//! **Redistancing.** The spline is sampled at the lattice nodes. Nodes within two lattice steps of a
+//! sign change (the control points the zero set's spline depends on) get their distance by projection
+//! onto the zero set along the gradient (Newton steps `p ← p − φ∇φ/|∇φ|²`, exact for a distance field
+//! and second order otherwise); the others from the eikonal equation `|∇d| = 1` by fast sweeping
+//! (Zhao, "A fast sweeping method for eikonal equations", Math. Comp. 2005) with the Godunov upwind
+//! update for the three spacings; the sign of the samples is kept. Only the nodes next to a sign change
+//! are held fixed: the sweep may lower the band's other projected values where a neighbour proves a
+//! shorter path (the projection of a node near a kink can find a far foot), so the distances stay
+//! consistent with each other. The sweep alone would not do for the band: first-order sweeping
+//! overestimates oblique distances by up to a tenth, and an optimisation redistances every step, so a
+//! bias there moves the surface a little every time (a sphere grew by 0.16 cells at 31³ over 40
+//! redistancings; with the band, 0.02). The distances `d` are then turned into control points. Taken as they are, the
 //! spline `S d` of the samples smooths them: it moves a surface of mean curvature `H` inward by about
 //! `h²H/3`. Control points that *interpolate* `d` (solving `S c = d`, per axis `(c_{i−1} + 4c_i +
 //! c_{i+1})/6 = d_i`) keep the zero set in place but amplify the kinks of a distance (its medial axis)
@@ -30,6 +37,17 @@ use std::sync::Arc;
 /// Largest correction, in cells, of a redistanced control point towards interpolation (module
 /// docs).
 const CORRECTION_CAP_CELLS: f32 = 0.1;
+
+/// How far, in lattice steps per axis, from a node next to a sign change the distances come from
+/// projection onto the zero set rather than from the sweep: a cubic spline's value in a cell depends
+/// on the 4³ control points around it, so the zero set depends on every node within two steps of a
+/// cell it crosses (module docs).
+const PROJECTED_BAND_NODES: usize = 2;
+
+/// Newton steps of a projection onto the zero set, its tolerance on `|φ|` and its reach, in cells.
+const PROJECTION_STEPS: usize = 8;
+const PROJECTION_TOLERANCE_CELLS: f32 = 1e-4;
+const PROJECTION_REACH_CELLS: f32 = 5.0;
 
 impl GridData {
     /// The control points of the same cubic B-spline on a lattice twice as fine (`n → 2n − 1` per
@@ -86,6 +104,7 @@ impl GridData {
         let mut d = vec![f32::INFINITY; samples.len()];
         let mut frozen = vec![false; samples.len()];
         let mut any = false;
+        let step = h.min_element();
         for z in 0..nz {
             for y in 0..ny {
                 for x in 0..nx {
@@ -109,8 +128,11 @@ impl GridData {
                         }
                     }
                     if edge.is_finite() {
-                        let g = node.gradient(at(x, y, z)).length();
-                        let est = if g > 1e-6 { s.abs() / g } else { s.abs() };
+                        let est =
+                            projected_distance(&node, at(x, y, z), step).unwrap_or_else(|| {
+                                let g = node.gradient(at(x, y, z)).length();
+                                if g > 1e-6 { s.abs() / g } else { s.abs() }
+                            });
                         d[i] = est.min(edge);
                         frozen[i] = true;
                         any = true;
@@ -120,6 +142,21 @@ impl GridData {
         }
         if !any {
             return self.clone();
+        }
+        // The rest of the band the zero set's spline depends on: projected distances as starting
+        // values, which the sweep below only lowers (where a neighbour proves a shorter path).
+        let band = dilated(&frozen, self.dims, PROJECTED_BAND_NODES);
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let i = index(x, y, z);
+                    if band[i] && !frozen[i] {
+                        if let Some(p) = projected_distance(&node, at(x, y, z), step) {
+                            d[i] = p;
+                        }
+                    }
+                }
+            }
         }
         fast_sweep(&mut d, &frozen, self.dims, h);
         for (v, s) in d.iter_mut().zip(&samples) {
@@ -187,6 +224,46 @@ impl GridData {
 }
 
 /// The values at the nodes of the spline of one line of control points `c`:
+/// The distance from `x` to the zero set of `node` along its gradient (Newton steps `p ← p −
+/// φ ∇φ/|∇φ|²`; exact for a distance field, whose gradient lines are straight and normal to the
+/// zero set). `None` when the steps do not settle within [`PROJECTION_REACH_CELLS`] cells of `x`
+/// (`cell` the smallest spacing), e.g. at a critical point.
+fn projected_distance(node: &Sdf, x: glam::Vec3, cell: f32) -> Option<f32> {
+    let mut p = x;
+    for _ in 0..PROJECTION_STEPS {
+        let v = node.eval_f32(p);
+        if v.abs() <= PROJECTION_TOLERANCE_CELLS * cell {
+            return Some((p - x).length());
+        }
+        let g = node.gradient(p);
+        let g2 = g.length_squared();
+        if g2.is_nan() || g2 <= 1e-12 {
+            return None;
+        }
+        p -= g * (v / g2);
+        if (p - x).length() > PROJECTION_REACH_CELLS * cell {
+            return None;
+        }
+    }
+    None
+}
+
+/// The nodes within `radius` lattice steps per axis (a cube) of a `true` one in `mask`.
+fn dilated(mask: &[bool], dims: [usize; 3], radius: usize) -> Vec<bool> {
+    let mut out = mask.to_vec();
+    for axis in 0..3 {
+        let stride = [1, dims[0], dims[0] * dims[1]][axis];
+        let n = dims[axis];
+        let src = out.clone();
+        for (i, o) in out.iter_mut().enumerate() {
+            let k = (i / stride) % n;
+            let (lo, hi) = (k.saturating_sub(radius), (k + radius).min(n - 1));
+            *o = (lo..=hi).any(|j| src[i - k * stride + j * stride]);
+        }
+    }
+    out
+}
+
 /// `(c_{i−1} + 4c_i + c_{i+1})/6`, with the ghost rule `c_{−1} = 2c_0 − c_1` making the end values
 /// `c_0` and `c_{n−1}`.
 fn spline_at_nodes(c: &[f32], out: &mut [f32]) {
@@ -405,6 +482,49 @@ mod tests {
         let after = grid_node(doubled.redistanced(lo, hi, 0.0), lo, hi);
         let l = after.lipschitz();
         assert!(l < 1.2 * 3f32.sqrt(), "Lipschitz bound {l}");
+    }
+
+    /// Redistancing again and again (an optimisation does it every step) leaves the zero set where
+    /// it is: a sphere's radius, measured by bisection along 200 directions, after 40 redistancings
+    /// at two resolutions.
+    #[test]
+    fn repeated_redistancing_does_not_move_the_zero_set() {
+        let (lo, hi) = (glam::Vec3::ZERO, glam::Vec3::ONE);
+        let centre = glam::Vec3::new(0.5, 0.48, 0.51);
+        let sphere = Sdf::sphere(centre.to_array(), 0.3);
+        for n in [31, 61] {
+            let mean_radius = |data: &GridData| {
+                let node = grid_node(data.clone(), lo, hi);
+                let mut sum = 0.0f64;
+                for k in 0..200 {
+                    let dir = (point(k, -glam::Vec3::ONE, glam::Vec3::ONE)).normalize();
+                    let (mut a, mut b) = (0.1f32, 0.45f32);
+                    for _ in 0..40 {
+                        let m = 0.5 * (a + b);
+                        if node.eval_f32(centre + dir * m) < 0.0 {
+                            a = m;
+                        } else {
+                            b = m;
+                        }
+                    }
+                    sum += a as f64;
+                }
+                (sum / 200.0) as f32
+            };
+            let mut data = bake(&sphere, lo, hi, n);
+            let h = 1.0 / (data.dims[0] as f32 - 1.0);
+            let before = mean_radius(&data);
+            for _ in 0..40 {
+                data = data.redistanced(lo, hi, 0.0);
+            }
+            let moved = (mean_radius(&data) - before) / h;
+            // Measured: 0.023 cells at 31³ and −0.004 at 61³ (0.155 and 0.088 when only the nodes
+            // next to a sign change took a distance of their own and the sweep did the rest).
+            assert!(
+                moved.abs() < 0.05,
+                "{n}³: the radius moved by {moved} cells"
+            );
+        }
     }
 
     /// With an iso-level, the node's function (spline − level) becomes the distance, and its zero set
