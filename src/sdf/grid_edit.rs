@@ -32,6 +32,7 @@
 //! of a cell.
 
 use super::{GridData, Sdf};
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Largest correction, in cells, of a redistanced control point towards interpolation (module
@@ -92,72 +93,63 @@ impl GridData {
             bbox_min + glam::Vec3::new(x as f32, y as f32, z as f32) * h
         };
         let index = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
+        let node_at = |i: usize| (i % nx, (i / nx) % ny, i / (nx * ny));
+        // Every node on its own, so the threads change nothing but the time.
         let mut samples = vec![0.0f32; nx * ny * nz];
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    samples[index(x, y, z)] = node.eval_f32(at(x, y, z));
-                }
-            }
-        }
-        // Nodes next to a sign change: distance from the value and the gradient.
-        let mut d = vec![f32::INFINITY; samples.len()];
-        let mut frozen = vec![false; samples.len()];
-        let mut any = false;
+        samples.par_iter_mut().enumerate().for_each(|(i, v)| {
+            let (x, y, z) = node_at(i);
+            *v = node.eval_f32(at(x, y, z));
+        });
         let step = h.min_element();
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    let i = index(x, y, z);
-                    let s = samples[i];
-                    // Along each lattice edge with a sign change the zero lies where the samples'
-                    // linear interpolant vanishes, `t h` away: an upper bound of the distance, and
-                    // the two ends' bounds sum to `h`, so neighbouring estimates stay consistent.
-                    let mut edge = f32::INFINITY;
-                    for (axis, (a, b, c)) in
-                        [(1, 0, 0), (0, 1, 0), (0, 0, 1)].into_iter().enumerate()
-                    {
-                        let fwd = (x + a < nx && y + b < ny && z + c < nz)
-                            .then(|| samples[index(x + a, y + b, z + c)]);
-                        let back = (x >= a && y >= b && z >= c)
-                            .then(|| samples[index(x - a, y - b, z - c)]);
-                        for t in [fwd, back].into_iter().flatten() {
-                            if (t < 0.0) != (s < 0.0) {
-                                edge = edge.min(s / (s - t) * h[axis]);
-                            }
+        // Nodes next to a sign change: their distance, held fixed by the sweep.
+        let seeds: Vec<Option<f32>> = (0..samples.len())
+            .into_par_iter()
+            .map(|i| {
+                let (x, y, z) = node_at(i);
+                let s = samples[i];
+                // Along each lattice edge with a sign change the zero lies where the samples'
+                // linear interpolant vanishes, `t h` away: an upper bound of the distance, and the
+                // two ends' bounds sum to `h`, so neighbouring estimates stay consistent.
+                let mut edge = f32::INFINITY;
+                for (axis, (a, b, c)) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)].into_iter().enumerate() {
+                    let fwd = (x + a < nx && y + b < ny && z + c < nz)
+                        .then(|| samples[index(x + a, y + b, z + c)]);
+                    let back =
+                        (x >= a && y >= b && z >= c).then(|| samples[index(x - a, y - b, z - c)]);
+                    for t in [fwd, back].into_iter().flatten() {
+                        if (t < 0.0) != (s < 0.0) {
+                            edge = edge.min(s / (s - t) * h[axis]);
                         }
                     }
-                    if edge.is_finite() {
-                        let est =
-                            projected_distance(&node, at(x, y, z), step).unwrap_or_else(|| {
-                                let g = node.gradient(at(x, y, z)).length();
-                                if g > 1e-6 { s.abs() / g } else { s.abs() }
-                            });
-                        d[i] = est.min(edge);
-                        frozen[i] = true;
-                        any = true;
-                    }
                 }
-            }
-        }
-        if !any {
+                edge.is_finite().then(|| {
+                    let est = projected_distance(&node, at(x, y, z), step).unwrap_or_else(|| {
+                        let g = node.gradient(at(x, y, z)).length();
+                        if g > 1e-6 { s.abs() / g } else { s.abs() }
+                    });
+                    est.min(edge)
+                })
+            })
+            .collect();
+        let frozen: Vec<bool> = seeds.iter().map(Option::is_some).collect();
+        if !frozen.contains(&true) {
             return self.clone();
         }
         // The rest of the band the zero set's spline depends on: projected distances as starting
         // values, which the sweep below only lowers (where a neighbour proves a shorter path).
         let band = dilated(&frozen, self.dims, PROJECTED_BAND_NODES);
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    let i = index(x, y, z);
-                    if band[i] && !frozen[i] {
-                        if let Some(p) = projected_distance(&node, at(x, y, z), step) {
-                            d[i] = p;
-                        }
-                    }
+        let mut d: Vec<f32> = seeds
+            .par_iter()
+            .enumerate()
+            .map(|(i, seed)| match seed {
+                Some(v) => *v,
+                None if band[i] => {
+                    let (x, y, z) = node_at(i);
+                    projected_distance(&node, at(x, y, z), step).unwrap_or(f32::INFINITY)
                 }
-            }
-        }
+                None => f32::INFINITY,
+            })
+            .collect();
         fast_sweep(&mut d, &frozen, self.dims, h);
         for (v, s) in d.iter_mut().zip(&samples) {
             if *s < 0.0 {
