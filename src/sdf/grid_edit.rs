@@ -20,16 +20,18 @@
 //! consistent with each other. The sweep alone would not do for the band: first-order sweeping
 //! overestimates oblique distances by up to a tenth, and an optimisation redistances every step, so a
 //! bias there moves the surface a little every time (a sphere grew by 0.16 cells at 31³ over 40
-//! redistancings; with the band, 0.02). The distances `d` are then turned into control points. Taken as they are, the
-//! spline `S d` of the samples smooths them: it moves a surface of mean curvature `H` inward by about
-//! `h²H/3`. Control points that *interpolate* `d` (solving `S c = d`, per axis `(c_{i−1} + 4c_i +
-//! c_{i+1})/6 = d_i`) keep the zero set in place but amplify the kinks of a distance (its medial axis)
-//! up to 27-fold in 3-D, and a large lattice difference anywhere raises the Lipschitz bound, and so the
-//! number of sphere-tracing steps, everywhere. So the correction is one step of that solve, `c = d + (d −
-//! S d)`, capped at a tenth of a cell: where the distance is smooth (curvature radii above about three
-//! cells) the cap does not bind and the surface moves by `O(h⁴)` instead of `O(h²)`; at kinks no
-//! difference of `c` exceeds those of `d` (at most one spacing, by fast sweeping) by more than a fifth
-//! of a cell.
+//! redistancings; with the band, 0.02).
+//!
+//! The distances `d` are then turned into control points. Taken as they are, the spline `S d` of
+//! the samples smooths them: it moves a surface of mean curvature `H` inward by about `h²H/3`.
+//! Control points that *interpolate* `d` (solving `S c = d`, per axis `(c_{i−1} + 4c_i +
+//! c_{i+1})/6 = d_i`) keep the zero set in place but amplify the kinks of a distance (its medial
+//! axis) up to 27-fold in 3-D, and a large lattice difference anywhere raises the Lipschitz bound,
+//! and so the number of sphere-tracing steps, everywhere. So the correction is one step of that
+//! solve, `c = d + (d − S d)`, capped at a tenth of a cell: where the distance is smooth
+//! (curvature radii above about three cells) the cap does not bind and the surface moves by
+//! `O(h⁴)` instead of `O(h²)`; at kinks no difference of `c` exceeds those of `d` (at most one
+//! spacing, by fast sweeping) by more than a fifth of a cell.
 
 use super::{GridData, Sdf};
 use rayon::prelude::*;
@@ -215,7 +217,6 @@ impl GridData {
     }
 }
 
-/// The values at the nodes of the spline of one line of control points `c`:
 /// The distance from `x` to the zero set of `node` along its gradient (Newton steps `p ← p −
 /// φ ∇φ/|∇φ|²`; exact for a distance field, whose gradient lines are straight and normal to the
 /// zero set). `None` when the steps do not settle within [`PROJECTION_REACH_CELLS`] cells of `x`
@@ -256,6 +257,7 @@ fn dilated(mask: &[bool], dims: [usize; 3], radius: usize) -> Vec<bool> {
     out
 }
 
+/// The values at the nodes of the spline of one line of control points `c`:
 /// `(c_{i−1} + 4c_i + c_{i+1})/6`, with the ghost rule `c_{−1} = 2c_0 − c_1` making the end values
 /// `c_0` and `c_{n−1}`.
 fn spline_at_nodes(c: &[f32], out: &mut [f32]) {
