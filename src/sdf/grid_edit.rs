@@ -363,6 +363,21 @@ mod tests {
         lo + (hi - lo) * glam::Vec3::new(f(1), f(2), f(3))
     }
 
+    /// The distance `t` in `[near, far]` from `centre` along `dir` where `node` changes from inside
+    /// to outside (bisection, 40 halvings).
+    fn zero_along(node: &Sdf, centre: glam::Vec3, dir: glam::Vec3, near: f32, far: f32) -> f32 {
+        let (mut a, mut b) = (near, far);
+        for _ in 0..40 {
+            let m = 0.5 * (a + b);
+            if node.eval_f32(centre + dir * m) < 0.0 {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        a
+    }
+
     #[test]
     fn refinement_keeps_the_spline() {
         let (lo, hi) = (
@@ -416,16 +431,8 @@ mod tests {
         for k in 0..400 {
             let p = point(k, lo + 0.2, hi - 0.2);
             let dir = (p - centre).normalize();
-            // Where the doubled grid's zero set is, along this direction (bisection).
-            let (mut a, mut b) = (0.2f32, 1.4f32);
-            for _ in 0..40 {
-                let m = 0.5 * (a + b);
-                if before.eval_f32(centre + dir * m) < 0.0 {
-                    a = m;
-                } else {
-                    b = m;
-                }
-            }
+            // Where the doubled grid's zero set is, along this direction.
+            let a = zero_along(&before, centre, dir, 0.2, 1.4);
             zero_shift = zero_shift.max(after.eval_f32(centre + dir * a).abs());
             // The distance to that zero set (a sphere of radius `a` around `centre`).
             let want = (p - centre).length() - a;
@@ -493,16 +500,7 @@ mod tests {
                 let mut sum = 0.0f64;
                 for k in 0..200 {
                     let dir = (point(k, -glam::Vec3::ONE, glam::Vec3::ONE)).normalize();
-                    let (mut a, mut b) = (0.1f32, 0.45f32);
-                    for _ in 0..40 {
-                        let m = 0.5 * (a + b);
-                        if node.eval_f32(centre + dir * m) < 0.0 {
-                            a = m;
-                        } else {
-                            b = m;
-                        }
-                    }
-                    sum += a as f64;
+                    sum += zero_along(&node, centre, dir, 0.1, 0.45) as f64;
                 }
                 (sum / 200.0) as f32
             };
