@@ -23,7 +23,7 @@ pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
 pub use grad::Grad;
-pub use lattice::{BlockValues, GridValues, LatticeTaps, lattice_sum_nested};
+pub use lattice::{BlockValues, GridValues, LatticeTaps, lattice_sum_f32, lattice_sum_nested};
 pub use num_dual::Dual32;
 pub use reverse::{MAX_GRADIENT_ENTRY, Mark, Recording, Rev};
 
@@ -160,6 +160,13 @@ pub trait Scalar:
         self * self
     }
 
+    /// The value itself if this is `f32`, the tracer's type, which takes vectorised fast paths that
+    /// give the same bits as the generic code; `None` for the derivative and interval types.
+    #[inline(always)]
+    fn as_f32(self) -> Option<f32> {
+        None
+    }
+
     /// A grid's B-spline at one point: the separable sum of [`lattice_sum_nested`] over the values of
     /// a lattice of `dims = [nx, ny, nz]` (x fastest). `block` is the gradient entry of `values[0]` when
     /// the values are differentiated in reverse mode ([`BlockValues::block`]); other types ignore it.
@@ -205,6 +212,19 @@ impl Scalar for f32 {
     #[inline(always)]
     fn constant(v: f32) -> Self {
         v
+    }
+    #[inline(always)]
+    fn as_f32(self) -> Option<f32> {
+        Some(self)
+    }
+    #[inline(always)]
+    fn lattice_sum(
+        taps: &LatticeTaps<Self>,
+        values: &[f32],
+        dims: [usize; 3],
+        _block: Slot,
+    ) -> Self {
+        lattice_sum_f32(taps, values, dims[0], dims[1])
     }
     #[inline(always)]
     fn primal(self) -> f32 {

@@ -16,7 +16,7 @@
 //! (as when a rayon task, started from inside a recording, is stolen by the recording thread):
 //! [`Recording::start`] refuses to start while one is active.
 
-use super::lattice::{LatticeTaps, lattice_sum_nested};
+use super::lattice::{LatticeTaps, lattice_sum_f32};
 use super::{Scalar, Slot, rules};
 use std::cell::RefCell;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -438,7 +438,7 @@ impl Scalar for Rev {
             return Self::new(0.0);
         }
         let primal = taps.map(|_, w| w.v);
-        let v = lattice_sum_nested::<f32>(&primal, values, nx, ny);
+        let v = lattice_sum_f32(&primal, values, nx, ny);
         let moving = taps.weight.iter().flatten().any(|w| w.i != CONSTANT);
         if block.is_none() && !moving {
             return Self::new(v);
@@ -494,7 +494,7 @@ impl Scalar for Rev {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scalar::DualN;
+    use crate::scalar::{DualN, lattice_sum_nested};
 
     /// A 5×4×6 lattice of distinct values.
     fn lattice() -> (Vec<f32>, [usize; 3]) {

@@ -106,14 +106,52 @@ where
         // Ghost c_{−1} = 2c_0 − c_1.
         ([0, 1, 2, 3], [b1 + b0 * 2.0, b2 - b0, b3, zero])
     } else if i == n - 2 {
-        // Ghost c_n = 2c_{n−1} − c_{n−2}.
+        // Ghost c_n = 2c_{n−1} − c_{n−2}; the taps stay four consecutive indices (the first with
+        // weight 0) so that a row of them is one vector load.
         (
-            [n - 3, n - 2, n - 1, n - 1],
-            [b0, b1 - b3, b2 + b3 * 2.0, zero],
+            [n - 4, n - 3, n - 2, n - 1],
+            [zero, b0, b1 - b3, b2 + b3 * 2.0],
         )
     } else {
         ([i - 1, i, i + 1, i + 2], [b0, b1, b2, b3])
     }
+}
+
+/// [`spline`] in `f32` (no derivative), bit for bit: the three axes' lattice coordinates and basis
+/// weights side by side in the lanes of one vector (the same operations, lane by lane), then the
+/// vectorised lattice sum. The tracer's evaluation.
+#[inline(always)]
+fn spline_f32(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: glam::Vec3) -> f32 {
+    let [nx, ny, nz] = data.dims;
+    let ext = glam::Vec4::from((bmax - bmin, 1.0));
+    let last = glam::Vec4::new((nx - 1) as f32, (ny - 1) as f32, (nz - 1) as f32, 0.0);
+    // A flat box has one position along that axis: sit on its first layer.
+    let inv_h = glam::Vec4::select(ext.cmpgt(glam::Vec4::ZERO), last / ext, glam::Vec4::ZERO);
+    let u = (glam::Vec4::from((q, 0.0)) - glam::Vec4::from((bmin, 0.0))) * inv_h;
+    // As `axis_taps`: truncation (saturating NaN and negatives to 0), then the last cell.
+    let cell = [
+        (u.x as usize).min(nx - 2),
+        (u.y as usize).min(ny - 2),
+        (u.z as usize).min(nz - 2),
+    ];
+    let t = u - glam::Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+    let t2 = t * t;
+    let t3 = t2 * t;
+    let s = glam::Vec4::ONE - t;
+    let sixth = 1.0 / 6.0;
+    let b = [
+        s * s * s * sixth,
+        (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth,
+        (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth,
+        t3 * sixth,
+    ];
+    let axis = |a: usize| fold_ghosts(cell[a], data.dims[a], b.map(|v| v[a]), 0.0);
+    let ((ix, wx), (iy, wy), (iz, wz)) = (axis(0), axis(1), axis(2));
+    let taps = LatticeTaps {
+        index: [ix, iy, iz],
+        weight: [wx, wy, wz],
+    };
+    crate::scalar::lattice_sum_f32(&taps, &data.values, nx, ny)
 }
 
 /// The B-spline at `q`, which must lie in the box, with the derivative of the values that `selection`
@@ -127,6 +165,9 @@ fn spline<S: Scalar>(
     selection: &BlockValues,
     q: Vec3<S>,
 ) -> S {
+    if let (Some(x), Some(y), Some(z)) = (q.x.as_f32(), q.y.as_f32(), q.z.as_f32()) {
+        return S::constant(spline_f32(data, bmin, bmax, glam::Vec3::new(x, y, z)));
+    }
     let ext = bmax - bmin;
     let taps = |a: usize, c: S| {
         let n = data.dims[a];
