@@ -7,7 +7,9 @@
 //! empty, and a ray inside it can jump to where it leaves the cube without evaluating the spline. Sphere
 //! tracing then starts at the first straddling cell the ray meets, not where it enters the shape's
 //! bounds: the spline's Lipschitz bound (up to `√3` around a baked shape's kinks) makes the steps there
-//! short, and each step is an evaluation of 64 control points.
+//! short, and each step is an evaluation of 64 control points. Each cell also keeps the Lipschitz
+//! bounds and a bound of the second directional derivative over itself and its 26 neighbours (valid
+//! within one cell of any of its points), with which the tracer steps inside straddling cells.
 //!
 //! It applies when the shape's node is a grid under similarity transforms (and names), and when the
 //! surface does not reach beyond the grid box (beyond it `φ = φ(clamp(x)) + |x − clamp(x)|`, positive
@@ -40,6 +42,10 @@ pub struct EmptySpace {
     /// Per cell, the inverse Lipschitz bounds `[outside, inside]` over the cell and its 26 neighbours:
     /// valid within one cell of any point of the cell.
     inv_lipschitz: Vec<[f32; 2]>,
+    /// Per cell, `1/M` for the bound `M` of the spline's second derivative along any unit direction
+    /// over the cell and its 26 neighbours (a length; infinite where the spline is linear there):
+    /// valid within one cell of any point of the cell, inside the grid box.
+    curvature_radius: Vec<f32>,
     /// The shortest edge of a cell in the shape's frame: how far from a point the neighbourhood's
     /// bounds certainly hold.
     pub cell_size: f32,
@@ -66,6 +72,9 @@ pub struct Candidate {
     /// Inverse Lipschitz bounds `[outside, inside]` that hold within [`EmptySpace::cell_size`] of any
     /// point of that cell.
     pub inv_lipschitz: [f32; 2],
+    /// `1/M`, `M` a bound of `|d²φ/dt²|` along a unit direction that holds within
+    /// [`EmptySpace::cell_size`] of any point of that cell inside the grid box (0 when unknown).
+    pub curvature_radius: f32,
 }
 
 impl EmptySpace {
@@ -86,6 +95,10 @@ impl EmptySpace {
                     to_lattice: inner.to_lattice * to_child,
                     offset: inner.to_lattice * child_offset + inner.offset,
                     cell_size: frame.from_child_length(inner.cell_size),
+                    // Second derivatives scale as 1/length: their radius as a length.
+                    curvature_radius: (inner.curvature_radius.iter())
+                        .map(|&r| frame.from_child_length(r))
+                        .collect(),
                     ..inner
                 })
             }
@@ -107,12 +120,20 @@ impl EmptySpace {
                 let scale = glam::Vec3::from(cells.map(|c| c as f32)) / ext;
                 let patches = grid::patch_lipschitz(data, *bbox_min, *bbox_max, level.value);
                 let straddling: Vec<bool> = patches.iter().map(|p| p.straddling).collect();
+                let curvature = grid::patch_curvature(data, *bbox_min, *bbox_max);
                 Some(Self {
                     to_lattice: glam::Mat3::from_diagonal(scale),
                     offset: -*bbox_min * scale,
                     cells,
                     distance: chessboard_distance(&straddling, cells),
                     inv_lipschitz: neighbourhood_inverse_bounds(&patches, cells),
+                    curvature_radius: neighbourhood_max(
+                        curvature.into_iter().map(|m| [m]).collect(),
+                        cells,
+                    )
+                    .into_iter()
+                    .map(|[m]| 1.0 / m)
+                    .collect(),
                     cell_size: (ext / glam::Vec3::from(cells.map(|c| c as f32))).min_element(),
                 })
             }
@@ -223,6 +244,7 @@ impl EmptySpace {
                     t,
                     until: leave,
                     inv_lipschitz: self.inv_lipschitz[index],
+                    curvature_radius: self.curvature_radius[index],
                 });
             }
             // Rounding can put `leave` at or behind `t` on a cell's face: move on by a sliver.
@@ -237,6 +259,7 @@ impl EmptySpace {
             t: t.min(t1),
             until: t.min(t1),
             inv_lipschitz: [0.0; 2],
+            curvature_radius: 0.0,
         })
     }
 }
@@ -251,6 +274,14 @@ pub struct LatticeRay {
     /// Where the line enters and leaves the lattice box (`enter > exit` when it misses).
     enter: f32,
     exit: f32,
+}
+
+impl LatticeRay {
+    /// Where the ray leaves the grid box (its parameter `t`; below `enter` when it misses the box).
+    #[inline]
+    pub fn exit(&self) -> f32 {
+        self.exit
+    }
 }
 
 /// Where the line `o + t d` is inside the box `[lo, hi]`: `(enter, exit)`, or `None` if it misses. Axes
@@ -279,28 +310,33 @@ fn neighbourhood_inverse_bounds(
     patches: &[grid::PatchLipschitz],
     cells: [usize; 3],
 ) -> Vec<[f32; 2]> {
-    // The maximum over the 3×3×3 block is three maxima over 3 cells along each axis in turn.
-    let mut bound: Vec<[f32; 2]> = (patches.iter())
+    let bound: Vec<[f32; 2]> = (patches.iter())
         .map(|p| [p.outside, p.inside].map(|reaches| if reaches { p.bound } else { 0.0 }))
         .collect();
-    let strides = [1, cells[0], cells[0] * cells[1]];
-    for (a, &n) in cells.iter().enumerate() {
-        let stride = strides[a];
-        let before = bound.clone();
-        for (k, out) in bound.iter_mut().enumerate() {
-            let i = (k / stride) % n;
-            let near = |j: usize| before[k - i * stride + j * stride];
-            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
-            for j in lo..=hi {
-                let b = near(j);
-                *out = [out[0].max(b[0]), out[1].max(b[1])];
-            }
-        }
-    }
-    bound
+    neighbourhood_max(bound, cells)
         .into_iter()
         .map(|b| b.map(|b| if b > 0.0 { 1.0 / b } else { 0.0 }))
         .collect()
+}
+
+/// Per cell (x fastest, `cells` per axis), the elementwise maximum of `v` over the cell and its 26
+/// neighbours (those that exist).
+fn neighbourhood_max<const N: usize>(mut v: Vec<[f32; N]>, cells: [usize; 3]) -> Vec<[f32; N]> {
+    // The maximum over the 3×3×3 block is three maxima over 3 cells along each axis in turn.
+    let strides = [1, cells[0], cells[0] * cells[1]];
+    for (a, &n) in cells.iter().enumerate() {
+        let stride = strides[a];
+        let before = v.clone();
+        for (k, out) in v.iter_mut().enumerate() {
+            let i = (k / stride) % n;
+            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            for j in lo..=hi {
+                let b = before[k - i * stride + j * stride];
+                *out = std::array::from_fn(|c| out[c].max(b[c]));
+            }
+        }
+    }
+    v
 }
 
 /// The chessboard (L∞) distance, in cells, from each cell to the nearest `seed` cell, saturated at 255

@@ -485,6 +485,61 @@ pub(super) fn patch_lipschitz(
     out
 }
 
+/// A bound of the spline's second derivative along any unit direction, `|dᵀ H d| ≤ M`, over each patch
+/// (lattice cell), x fastest; `data` must be usable.
+///
+/// On a patch, `∂_a∂_a φ` is a linear-by-cubic-by-cubic B-spline whose control points are the patch's
+/// second differences `Δ_a² c / h_a²`, and `∂_a∂_b φ` (a ≠ b) a quadratic-by-quadratic-by-cubic one of
+/// the mixed differences `Δ_a Δ_b c / (h_a h_b)`: convex combinations, so `|H_ab| ≤ B_ab`, the largest
+/// of those. Then `|dᵀ H d| ≤ Σ_ab |d_a| |d_b| B_ab ≤ max_a Σ_b B_ab` (the largest row sum bounds the
+/// spectral norm of the non-negative matrix `B`). A few ulps of headroom are added. Inside the box
+/// only: beyond it the distance to the box adds its own curvature.
+pub(super) fn patch_curvature(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> Vec<f32> {
+    let (values, e) = extended_lattice(data);
+    let ext = bmax - bmin;
+    let patch_dims = data.dims.map(|n| n - 1);
+    let inv_h: [f32; 3] = std::array::from_fn(|a| {
+        if ext[a] > 0.0 {
+            (data.dims[a] - 1) as f32 / ext[a]
+        } else {
+            0.0
+        }
+    });
+    let stride = [1, e[0], e[0] * e[1]];
+    // bound[a][b] per patch, for a ≤ b.
+    let mut bound: [[Vec<f32>; 3]; 3] = Default::default();
+    for a in 0..3 {
+        for b in a..3 {
+            let (sa, sb) = (stride[a], stride[b]);
+            let mut dims = e;
+            dims[a] -= 1;
+            dims[b] -= 1;
+            let mut w = [4; 3];
+            w[a] -= 1;
+            w[b] -= 1;
+            let scale = inv_h[a] * inv_h[b];
+            let mut diff = Vec::with_capacity(dims.iter().product());
+            for z in 0..dims[2] {
+                for y in 0..dims[1] {
+                    for x in 0..dims[0] {
+                        let i = x + e[0] * (y + e[1] * z);
+                        let d = values[i + sa + sb] - values[i + sa] - values[i + sb] + values[i];
+                        diff.push(d.abs() * scale);
+                    }
+                }
+            }
+            bound[a][b] = patch_windows(diff, dims, w, patch_dims);
+        }
+    }
+    (0..patch_dims.iter().product::<usize>())
+        .map(|k| {
+            let b = |a: usize, c: usize| bound[a.min(c)][a.max(c)][k];
+            let rows = [0, 1, 2].map(|a| b(a, 0) + b(a, 1) + b(a, 2));
+            rows[0].max(rows[1]).max(rows[2]) * (1.0 + 1e-5)
+        })
+        .collect()
+}
+
 /// `min` over the ghost-extended 2-D lattice of one face layer: a lower bound of the spline on that face
 /// (the face value is the 2-D spline of the layer, a convex combination of its extended control points).
 fn face_min(get: impl Fn(usize, usize) -> f32, n1: usize, n2: usize) -> f32 {

@@ -378,6 +378,13 @@ impl Sdf {
         }
     }
 
+    /// `φ(p)` and `∇φ(p)` in one evaluation of a grid's taps, for a grid under names and similarity
+    /// transforms, inside its box; `None` elsewhere and for every other node. The value is
+    /// [`Sdf::eval_f32`]'s to rounding (bit for bit for a grid without transforms).
+    pub fn value_and_gradient(&self, p: glam::Vec3) -> Option<(f32, glam::Vec3)> {
+        self.grid_jet::<false>(p).map(|(v, g, _)| (v, g))
+    }
+
     /// The gradient of the field of the faces ([`Sdf::eval_faces`]): [`Sdf::gradient`] except next
     /// to a sharp primitive's edges (outside it, within the distance to them), where it is the nearest
     /// face's.

@@ -27,6 +27,17 @@
 //! bound of a cell's neighbourhood holds within one cell of it, so a step longer than a cell takes the
 //! larger of that cell and the global step).
 //!
+//! Where that step is shorter than a cell, the tracer also uses the slope of `g` along the ray, `s`,
+//! and a bound `M` of its second derivative over the cell's neighbourhood (from the control points'
+//! second differences, [`EmptySpace`]): `g(t + τ) ≥ g + sτ − ½Mτ²`, so no crossing comes before
+//! the first positive root of that parabola, and the step is the larger of `g/L` and nine tenths of
+//! that root, at most a cell and never beyond the grid's box. `g/L` ignores the direction: a shadow or
+//! bounce ray leaving a surface at an angle `θ` grows its steps only by a factor `1 + sin θ / L` each
+//! from the tolerance, about 19 evaluations to leave the cells around the surface on the race's grid
+//! (31³), against about 10 with the parabola; a ray grazing the surface gets Newton-like steps
+//! `g/|s|` instead of `g/L`. After such a step the next point is evaluated with its gradient (the
+//! grid's value and gradient from one pass over its taps), which the next step needs.
+//!
 //! # Closed forms
 //!
 //! Spheres, planes, boxes, cylinders and similarity transforms of them have their crossings with a line
@@ -199,6 +210,7 @@ const NO_CELL: Candidate = Candidate {
     t: f32::NEG_INFINITY,
     until: f32::NEG_INFINITY,
     inv_lipschitz: [0.0; 2],
+    curvature_radius: 0.0,
 };
 
 /// The side of the surface a ray is on at some `t`, and where marching may resume from.
@@ -325,6 +337,19 @@ impl<'a> Marcher<'a> {
         self.sdf.eval_f32(self.ray.at(t))
     }
 
+    /// `φ` at `t` with its slope `∇φ · d` along the ray where the field has a grid's fast jet there
+    /// (one evaluation of the spline's taps for both); `None` for the slope elsewhere.
+    #[inline]
+    fn phi_slope(&mut self, t: f32) -> (f32, Option<f32>) {
+        match self.sdf.value_and_gradient(self.ray.at(t)) {
+            Some((phi, gradient)) => {
+                self.steps_left = self.steps_left.saturating_sub(1);
+                (phi, Some(gradient.dot(self.ray.d)))
+            }
+            None => (self.phi(t), None),
+        }
+    }
+
     /// The side the ray is on at `t` (where `φ = phi`). On the surface (`|φ| ≤ eps/100`, e.g. a point the
     /// tracer returned) the side is the one the ray moves into: probes at `t + eps, t + 2 eps, …` up to
     /// `64 eps` until `|φ|` exceeds the on-surface level, and marching resumes from that probe. This is
@@ -380,6 +405,8 @@ impl<'a> Marcher<'a> {
         // The straddling cell of `space` the ray is in, until it leaves it.
         let mut cell = NO_CELL;
         let side = usize::from(sign < 0.0);
+        // The slope of `g` along the ray at `t`, when the evaluation there gave it.
+        let mut slope: Option<f32> = None;
         loop {
             // Also stops on a NaN parameter.
             if t.partial_cmp(&self.t1) != Some(std::cmp::Ordering::Less) {
@@ -400,6 +427,7 @@ impl<'a> Marcher<'a> {
                     let g_next = sign * self.phi(found.t);
                     if g_next > 0.0 {
                         (t, g) = (found.t, g_next);
+                        slope = None;
                         previous = None;
                         creep = self.eps(t);
                         continue;
@@ -407,7 +435,22 @@ impl<'a> Marcher<'a> {
                     cell = NO_CELL;
                 }
             }
-            let safe = self.safe_step(g, inv_l, cell.inv_lipschitz[side]);
+            let mut safe = self.safe_step(g, inv_l, cell.inv_lipschitz[side]);
+            // Where the Lipschitz step is short, the second-order bound may reach further; the point
+            // after such a step is evaluated with its slope, which the next step will likely need.
+            let mut curved = false;
+            if let Some((space, lattice_ray)) = &self.space
+                && cell.curvature_radius > 0.0
+                && safe < space.cell_size
+            {
+                curved = true;
+                let reach = space.cell_size.min(lattice_ray.exit() - t);
+                let s = match slope {
+                    Some(s) => s,
+                    None => sign * self.sdf.gradient(self.ray.at(t)).dot(self.ray.d),
+                };
+                safe = safe.max(self.curved_step(s, g, cell.curvature_radius, reach));
+            }
             let eps = self.eps(t);
             let step = if safe >= MAX_CREEP * eps {
                 creep = eps;
@@ -430,11 +473,17 @@ impl<'a> Marcher<'a> {
             }
             .max(min_progress(t));
             let t_next = (t + step).min(self.t1);
-            let g_next = sign * self.phi(t_next);
+            let (phi_next, slope_next) = if curved {
+                self.phi_slope(t_next)
+            } else {
+                (self.phi(t_next), None)
+            };
+            let g_next = sign * phi_next;
             if g_next.is_nan() {
                 return Crossing::Miss;
             }
             if g_next > 0.0 {
+                slope = slope_next.map(|s| sign * s);
                 previous = Some((t, g));
                 t = t_next;
                 g = g_next;
@@ -451,6 +500,7 @@ impl<'a> Marcher<'a> {
             from = next;
             t = from.t;
             g = from.g;
+            slope = None;
             creep = self.eps(t);
             previous = None;
         }
@@ -523,6 +573,35 @@ impl<'a> Marcher<'a> {
                 }
             }
             _ => global,
+        }
+    }
+
+    /// The step that cannot cross the surface from a point where `sign·φ = g > 0` by the second-order
+    /// bound `g(t + τ) ≥ g + s τ − ½ M τ²` (`s` the slope of `sign·φ` along the ray, `M = 1/radius`
+    /// bounding its second derivative within `reach`): nine tenths of the bound's first root, at most
+    /// `reach`. Where the ray leaves the surface or grazes it, this is far longer than `g/L`, which
+    /// ignores the direction: a ray leaving a surface at an angle would otherwise crawl out by steps
+    /// growing geometrically from the tolerance.
+    fn curved_step(&self, s: f32, g: f32, radius: f32, reach: f32) -> f32 {
+        if !(reach > 0.0 && g > 0.0) {
+            return 0.0;
+        }
+        let m = self.ray.d.length_squared() / radius;
+        let root = (s * s + 2.0 * m * g).sqrt();
+        // The first positive root of g + sτ − ½mτ², in the form without cancellation for each sign
+        // of `s` (a linear bound where m = 0).
+        let tau = if s < 0.0 {
+            2.0 * g / (root - s)
+        } else if m > 0.0 {
+            (s + root) / m
+        } else {
+            f32::INFINITY
+        };
+        // Also 0 for a NaN slope.
+        if tau > 0.0 {
+            (0.9 * tau).min(reach)
+        } else {
+            0.0
         }
     }
 
