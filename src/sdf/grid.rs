@@ -79,16 +79,38 @@ fn axis_taps<S: Scalar>(u: S, n: usize) -> ([usize; 4], [S; 4]) {
     // floor, below 0 the clamp to the first cell. Cheaper than `floor`, a libm call without SSE4.1.
     let i = (u.primal() as usize).min(n - 2);
     let t = u - i as f32;
+    fold_ghosts(i, n, cubic_basis(t, S::one() - t), S::zero())
+}
+
+/// The uniform cubic B-spline basis on `[0, 1]` (de Boor) at `t`, given `s = 1 − t`: the weights of taps
+/// `i − 1, i, i + 1, i + 2`. One formula for every type that evaluates it (a scalar type, `f32`, or the
+/// three axes side by side in a vector), so that all give the same bits.
+#[inline(always)]
+pub(super) fn cubic_basis<T>(t: T, s: T) -> [T; 4]
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<Output = T>
+        + std::ops::Add<f32, Output = T>
+        + std::ops::Mul<f32, Output = T>,
+{
     let t2 = t * t;
     let t3 = t2 * t;
-    let s = S::one() - t;
-    // Uniform cubic B-spline basis on [0, 1] (de Boor): taps i − 1, i, i + 1, i + 2.
     let sixth = 1.0 / 6.0;
-    let b0 = s * s * s * sixth;
-    let b1 = (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth;
-    let b2 = (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth;
-    let b3 = t3 * sixth;
-    fold_ghosts(i, n, [b0, b1, b2, b3], S::zero())
+    [
+        s * s * s * sixth,
+        (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth,
+        (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth,
+        t3 * sixth,
+    ]
+}
+
+/// Lattice cells per unit length along an axis of `n` points spanning `ext`; 0 for a flat box (one
+/// position along that axis: the spline sits on its first layer).
+#[inline(always)]
+pub(super) fn inv_spacing(n: usize, ext: f32) -> f32 {
+    if ext > 0.0 { (n - 1) as f32 / ext } else { 0.0 }
 }
 
 /// The lattice indices of the four taps of cell `i` (of `n ≥ 4` points) with the weights `b` of taps
@@ -123,10 +145,13 @@ where
 #[inline(always)]
 fn spline_f32(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: glam::Vec3) -> f32 {
     let [nx, ny, nz] = data.dims;
-    let ext = glam::Vec4::from((bmax - bmin, 1.0));
-    let last = glam::Vec4::new((nx - 1) as f32, (ny - 1) as f32, (nz - 1) as f32, 0.0);
-    // A flat box has one position along that axis: sit on its first layer.
-    let inv_h = glam::Vec4::select(ext.cmpgt(glam::Vec4::ZERO), last / ext, glam::Vec4::ZERO);
+    let ext = bmax - bmin;
+    let inv_h = glam::Vec4::new(
+        inv_spacing(nx, ext.x),
+        inv_spacing(ny, ext.y),
+        inv_spacing(nz, ext.z),
+        0.0,
+    );
     let u = (glam::Vec4::from((q, 0.0)) - glam::Vec4::from((bmin, 0.0))) * inv_h;
     // As `axis_taps`: truncation (saturating NaN and negatives to 0), then the last cell.
     let cell = [
@@ -135,16 +160,7 @@ fn spline_f32(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: glam::Vec3
         (u.z as usize).min(nz - 2),
     ];
     let t = u - glam::Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
-    let t2 = t * t;
-    let t3 = t2 * t;
-    let s = glam::Vec4::ONE - t;
-    let sixth = 1.0 / 6.0;
-    let b = [
-        s * s * s * sixth,
-        (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth,
-        (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth,
-        t3 * sixth,
-    ];
+    let b = cubic_basis(t, glam::Vec4::ONE - t);
     let axis = |a: usize| fold_ghosts(cell[a], data.dims[a], b.map(|v| v[a]), 0.0);
     let ((ix, wx), (iy, wy), (iz, wz)) = (axis(0), axis(1), axis(2));
     let taps = LatticeTaps {
@@ -171,13 +187,7 @@ fn spline<S: Scalar>(
     let ext = bmax - bmin;
     let taps = |a: usize, c: S| {
         let n = data.dims[a];
-        // A flat box has one position along that axis: sit on its first layer.
-        let inv_h = if ext[a] > 0.0 {
-            (n - 1) as f32 / ext[a]
-        } else {
-            0.0
-        };
-        axis_taps((c - bmin[a]) * inv_h, n)
+        axis_taps((c - bmin[a]) * inv_spacing(n, ext[a]), n)
     };
     let (ix, wx) = taps(0, q.x);
     let (iy, wy) = taps(1, q.y);
@@ -432,11 +442,7 @@ pub(super) fn patch_lipschitz(
     let windows =
         |v: Vec<f32>, dims: [usize; 3], w: [usize; 3]| patch_windows(v, dims, w, patch_dims);
     let per_axis: [Vec<f32>; 3] = std::array::from_fn(|a| {
-        let inv_h = if ext[a] > 0.0 {
-            (data.dims[a] - 1) as f32 / ext[a]
-        } else {
-            0.0
-        };
+        let inv_h = inv_spacing(data.dims[a], ext[a]);
         // |differences| along `a`; a patch reads 3 of them along `a` and 4 across.
         let stride = [1, e[0], e[0] * e[1]][a];
         let mut dims = e;
@@ -498,13 +504,7 @@ pub(super) fn patch_curvature(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec
     let (values, e) = extended_lattice(data);
     let ext = bmax - bmin;
     let patch_dims = data.dims.map(|n| n - 1);
-    let inv_h: [f32; 3] = std::array::from_fn(|a| {
-        if ext[a] > 0.0 {
-            (data.dims[a] - 1) as f32 / ext[a]
-        } else {
-            0.0
-        }
-    });
+    let inv_h: [f32; 3] = std::array::from_fn(|a| inv_spacing(data.dims[a], ext[a]));
     let stride = [1, e[0], e[0] * e[1]];
     // bound[a][b] per patch, for a ≤ b.
     let mut bound: [[Vec<f32>; 3]; 3] = Default::default();

@@ -12,7 +12,7 @@
 //! back to AD there.
 
 use super::GridData;
-use super::grid::fold_ghosts;
+use super::grid::{cubic_basis, fold_ghosts, inv_spacing};
 use glam::Vec4;
 
 /// The weights of one axis's four taps for the value and its first and second derivatives along the
@@ -28,21 +28,14 @@ struct AxisJet {
 /// in that range. The value weights are [`super::grid`]'s, bit for bit.
 #[inline(always)]
 fn axis_jet(x: f32, lo: f32, ext: f32, n: usize) -> AxisJet {
-    let inv_h = if ext > 0.0 { (n - 1) as f32 / ext } else { 0.0 };
+    let inv_h = inv_spacing(n, ext);
     let u = (x - lo) * inv_h;
     let i = (u as usize).min(n - 2);
     let t = u - i as f32;
     let t2 = t * t;
-    let t3 = t2 * t;
     let s = 1.0 - t;
-    let sixth = 1.0 / 6.0;
-    // The uniform cubic B-spline basis on [0, 1] as the grid writes it, and its derivatives in t.
-    let w = [
-        s * s * s * sixth,
-        (t3 * 3.0 - t2 * 6.0 + 4.0) * sixth,
-        (t2 * 3.0 + t * 3.0 - t3 * 3.0 + 1.0) * sixth,
-        t3 * sixth,
-    ];
+    // The grid's basis, and its derivatives in t.
+    let w = cubic_basis(t, s);
     let d = [
         -0.5 * s * s,
         1.5 * t2 - 2.0 * t,
