@@ -1026,5 +1026,27 @@ fn rev_grid_sdf_matches_forward_direction() {
                 f.eps[0]
             );
         }
+        // All four in one sweep (their value shares are summed per lookup before they are reported).
+        let c = [0.7f32, -1.3, 0.4, 2.1];
+        let combined = Rev::linear_combination(&[
+            (gr.v, c[0]),
+            (gr.g[0], c[1]),
+            (gr.g[1], c[2]),
+            (gr.g[2], c[3]),
+        ]);
+        let want = c[0] * gf.v.eps[0]
+            + c[1] * gf.g[0].eps[0]
+            + c[2] * gf.g[1].eps[0]
+            + c[3] * gf.g[2].eps[0];
+        let (mut along, mut scale) = (0.0f64, 0.0f64);
+        Recording::sweep(combined, |entry, d| {
+            let term = d as f64 * u[entry as usize - 3] as f64;
+            along += term;
+            scale += term.abs();
+        });
+        assert!(
+            (along - want as f64).abs() <= 1e-5 * scale.max(0.1),
+            "the four at {p}: along u reverse {along} vs forward {want}"
+        );
     }
 }

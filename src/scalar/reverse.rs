@@ -9,8 +9,11 @@
 //! One sample of an estimator is recorded, turned into one scalar (the sample's share of
 //! `Σ_pixels g · I`), and swept backwards once ([`Recording::sweep`]): every node's adjoint times its
 //! partials flows to its operands, and parameter operands hand their share to the caller. The tape is
-//! then rewound for the next sample. A grid's B-spline sum is one node with its 64 values as operands
-//! ([`Scalar::lattice_sum`]), so grids of hundreds of thousands of values cost no leaves.
+//! then rewound for the next sample. A grid's B-spline sum is one node ([`Scalar::lattice_sum`]), so grids
+//! of hundreds of thousands of values cost no leaves; its 64 values are not operands but one
+//! [`LatticeRecord`] beside the node (the taps and their weights): the values are parameters, whose
+//! shares no other node needs, so they are expanded after the sweep, once per point for the value and
+//! the gradient of a lookup together (the four sums of a `Grad<Rev>` lookup share one set of taps).
 //!
 //! A tape belongs to a thread, so a [`Recording`] must not be interleaved with another on the same thread
 //! (as when a rayon task, started from inside a recording, is stolen by the recording thread):
@@ -44,8 +47,29 @@ pub struct Rev {
 struct Tape {
     ends: Vec<u32>,
     operands: Vec<(u32, f32)>,
+    lattices: Vec<LatticeRecord>,
     adjoints: Vec<f32>,
     active: bool,
+}
+
+/// The block operands of a [`Scalar::lattice_sum`] node: value `(iz[c]·ny + iy[b])·nx + ix[a]` of the
+/// block starting at gradient entry `first` has partial `wz[c]·wy[b]·wx[a]`.
+#[derive(Copy, Clone, Debug)]
+struct LatticeRecord {
+    node: u32,
+    first: u32,
+    nx: u32,
+    ny: u32,
+    index: [[u32; 4]; 3],
+    weight: [[f32; 4]; 3],
+}
+
+impl LatticeRecord {
+    /// Whether the two records address the same 64 values.
+    #[inline]
+    fn same_taps(&self, o: &Self) -> bool {
+        (self.first, self.nx, self.ny, self.index) == (o.first, o.nx, o.ny, o.index)
+    }
 }
 
 thread_local! {
@@ -53,6 +77,7 @@ thread_local! {
         RefCell::new(Tape {
             ends: Vec::new(),
             operands: Vec::new(),
+            lattices: Vec::new(),
             adjoints: Vec::new(),
             active: false,
         })
@@ -146,6 +171,7 @@ pub struct Recording {
 pub struct Mark {
     nodes: usize,
     operands: usize,
+    lattices: usize,
 }
 
 impl Recording {
@@ -164,6 +190,7 @@ impl Recording {
             t.active = true;
             t.ends.clear();
             t.operands.clear();
+            t.lattices.clear();
         });
         Self {
             _thread: std::marker::PhantomData,
@@ -182,6 +209,7 @@ impl Recording {
             Mark {
                 nodes: t.ends.len(),
                 operands: t.operands.len(),
+                lattices: t.lattices.len(),
             }
         })
     }
@@ -192,6 +220,7 @@ impl Recording {
             let mut t = t.borrow_mut();
             t.ends.truncate(mark.nodes);
             t.operands.truncate(mark.operands);
+            t.lattices.truncate(mark.lattices);
         });
     }
 
@@ -218,6 +247,7 @@ impl Recording {
             let Tape {
                 ends,
                 operands,
+                lattices,
                 adjoints,
                 ..
             } = t;
@@ -244,7 +274,51 @@ impl Recording {
                 }
                 end = start;
             }
+            expand_lattices(lattices, adjoints, &mut out);
         });
+    }
+}
+
+/// The block shares of the lattice records whose node the sweep reached, now that their adjoints are
+/// final: consecutive records over the same taps (the value and gradient sums of one lookup) are summed
+/// into one 4×4×4 array first, so each value of a lookup is reported once. Records with a zero adjoint
+/// are skipped, as nodes are.
+fn expand_lattices(lattices: &[LatticeRecord], adjoints: &[f32], out: &mut impl FnMut(u32, f32)) {
+    let mut shares = [[[0.0f32; 4]; 4]; 4];
+    let mut pending: Option<&LatticeRecord> = None;
+    let flush =
+        |r: &LatticeRecord, shares: &mut [[[f32; 4]; 4]; 4], out: &mut dyn FnMut(u32, f32)| {
+            let [ix, iy, iz] = r.index;
+            for (c, plane) in shares.iter_mut().enumerate() {
+                for (b, row) in plane.iter_mut().enumerate() {
+                    let start = r.first + (iz[c] * r.ny + iy[b]) * r.nx;
+                    for (a, share) in row.iter_mut().enumerate() {
+                        out(start + ix[a], std::mem::take(share));
+                    }
+                }
+            }
+        };
+    for r in lattices {
+        let a = adjoints.get(r.node as usize).copied().unwrap_or(0.0);
+        if a == 0.0 {
+            continue;
+        }
+        if let Some(p) = pending.filter(|p| !p.same_taps(r)) {
+            flush(p, &mut shares, out);
+        }
+        pending = Some(r);
+        let [wx, wy, wz] = r.weight;
+        for (plane, &z) in shares.iter_mut().zip(&wz) {
+            for (row, &y) in plane.iter_mut().zip(&wy) {
+                let azy = a * z * y;
+                for (share, &x) in row.iter_mut().zip(&wx) {
+                    *share += azy * x;
+                }
+            }
+        }
+    }
+    if let Some(p) = pending {
+        flush(p, &mut shares, out);
     }
 }
 
@@ -255,6 +329,7 @@ impl Drop for Recording {
             t.active = false;
             t.ends.clear();
             t.operands.clear();
+            t.lattices.clear();
         });
     }
 }
@@ -419,10 +494,11 @@ impl Scalar for Rev {
         })
     }
 
-    /// One node: the primal is the nested `f32` sum (bit for bit the image's); its operands are the 64
-    /// values of block `block` (partial: the product of the three weights) and every non-constant
-    /// weight (partial: the sum over the other two axes). An axis whose weights are all constant zeros
-    /// (a spatial derivative along another axis) gives a constant 0 without recording.
+    /// One node: the primal is the nested `f32` sum (bit for bit the image's); its operands are every
+    /// non-constant weight (partial: the sum over the other two axes) and, as one [`LatticeRecord`]
+    /// expanded after the sweep, the 64 values of block `block` (partial: the product of the three
+    /// weights). An axis whose weights are all constant zeros (a spatial derivative along another
+    /// axis) gives a constant 0 without recording.
     fn lattice_sum(
         taps: &LatticeTaps<Self>,
         values: &[f32],
@@ -447,20 +523,6 @@ impl Scalar for Rev {
         let [wx, wy, wz] = primal.weight;
         TAPE.with(|t| {
             let mut t = t.borrow_mut();
-            t.operands.reserve(64 + 12);
-            if let Some(first) = block {
-                for c in 0..4 {
-                    for b in 0..4 {
-                        let wzy = wz[c] * wy[b];
-                        let row = (iz[c] * ny + iy[b]) * nx;
-                        for a in 0..4 {
-                            let entry = first as usize + row + ix[a];
-                            debug_assert!(entry <= MAX_GRADIENT_ENTRY as usize);
-                            t.operand(PARAM | entry as u32, wzy * wx[a]);
-                        }
-                    }
-                }
-            }
             if moving {
                 // ∂/∂w_axis[k]: the sum with that axis's weights replaced by the unit vector e_k,
                 // i.e. the values contracted with the other two axes' weights.
@@ -486,6 +548,20 @@ impl Scalar for Rev {
                 }
             }
             let i = t.node();
+            if let Some(first) = block {
+                debug_assert!(
+                    first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
+                    "the block's gradient entries overflow"
+                );
+                t.lattices.push(LatticeRecord {
+                    node: i,
+                    first,
+                    nx: nx as u32,
+                    ny: ny as u32,
+                    index: taps.index.map(|axis| axis.map(|k| k as u32)),
+                    weight: primal.weight,
+                });
+            }
             Self { v, i }
         })
     }
