@@ -242,6 +242,10 @@ impl<const N: usize> Scalar for DualN<N> {
         }
     }
     #[inline(always)]
+    fn is_constant(self) -> bool {
+        self.eps.iter().all(|&e| e == 0.0)
+    }
+    #[inline(always)]
     fn primal(self) -> f32 {
         self.re
     }

@@ -189,6 +189,10 @@ impl<S: Scalar> Scalar for Grad<S> {
         }
     }
     #[inline(always)]
+    fn spatial_only(self) -> bool {
+        self.v.is_constant() && self.g.iter().all(|g| g.is_constant())
+    }
+    #[inline(always)]
     fn primal(self) -> f32 {
         self.v.primal()
     }

@@ -160,6 +160,22 @@ pub trait Scalar:
         self * self
     }
 
+    /// Whether this number is known to carry no derivative; `false` where that is not known (always
+    /// safe). Generic code asks it before taking shortcuts that hold for constants only.
+    #[inline(always)]
+    fn is_constant(self) -> bool {
+        false
+    }
+
+    /// Whether this is a coordinate of a point seeded in space only: a [`Grad`] whose value and spatial
+    /// gradient are constants, so that a smooth function of it is exactly its value plus its slope
+    /// times `self − primal` (first order in space, no parameter derivative, no mixed partial).
+    /// `false` for every other type.
+    #[inline(always)]
+    fn spatial_only(self) -> bool {
+        false
+    }
+
     /// The value itself if this is `f32`, the tracer's type, which takes vectorised fast paths that
     /// give the same bits as the generic code; `None` for the derivative and interval types.
     #[inline(always)]
@@ -212,6 +228,10 @@ impl Scalar for f32 {
     #[inline(always)]
     fn constant(v: f32) -> Self {
         v
+    }
+    #[inline(always)]
+    fn is_constant(self) -> bool {
+        true
     }
     #[inline(always)]
     fn as_f32(self) -> Option<f32> {

@@ -425,6 +425,10 @@ impl Scalar for Rev {
         Self::new(v)
     }
     #[inline(always)]
+    fn is_constant(self) -> bool {
+        Rev::is_constant(self)
+    }
+    #[inline(always)]
     fn primal(self) -> f32 {
         self.v
     }

@@ -12,7 +12,7 @@
 //! back to AD there.
 
 use super::GridData;
-use super::grid::{cubic_basis, fold_ghosts, inv_spacing};
+use super::grid::{cubic_basis, cubic_basis_slope, fold_ghosts, inv_spacing};
 use glam::Vec4;
 
 /// The weights of one axis's four taps for the value and its first and second derivatives along the
@@ -32,17 +32,10 @@ fn axis_jet(x: f32, lo: f32, ext: f32, n: usize) -> AxisJet {
     let u = (x - lo) * inv_h;
     let i = (u as usize).min(n - 2);
     let t = u - i as f32;
-    let t2 = t * t;
     let s = 1.0 - t;
     // The grid's basis, and its derivatives in t.
     let w = cubic_basis(t, s);
-    let d = [
-        -0.5 * s * s,
-        1.5 * t2 - 2.0 * t,
-        -1.5 * t2 + t + 0.5,
-        0.5 * t2,
-    ]
-    .map(|v| v * inv_h);
+    let d = cubic_basis_slope(t, s).map(|v| v * inv_h);
     let dd = [s, 3.0 * t - 2.0, 1.0 - 3.0 * t, t].map(|v| v * (inv_h * inv_h));
     let (index, w) = fold_ghosts(i, n, w, 0.0);
     let (_, d) = fold_ghosts(i, n, d, 0.0);
@@ -118,7 +111,7 @@ pub(super) fn jet<const SECOND: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scalar::{BlockValues, Param};
+    use crate::scalar::{BlockValues, Grad, Param};
     use crate::sdf::Sdf;
     use std::sync::Arc;
 
@@ -209,7 +202,9 @@ mod tests {
 
     /// The taps' value is the field's, bit for bit; gradient and Hessian are second-order AD's to
     /// rounding (relative to the largest derivative a lattice of values in [−1, 1] can have), over
-    /// small and large lattices, boxes far from the origin and tiny ones, with points on faces.
+    /// small and large lattices, boxes far from the origin and tiny ones, with points on faces. So is
+    /// the gradient of a lookup in `Grad` at a point seeded in space only, whose taps are linearised
+    /// (`grid::linear_axis_taps`), with the field's value bit for bit.
     #[test]
     fn value_gradient_and_hessian_match_forward_ad() {
         let cases = [
@@ -237,7 +232,7 @@ mod tests {
             // A value, derivative and second derivative of the spline are sums of at most 64 taps of
             // at most 1 in magnitude times weights whose sums are at most 2, 2 inv_h and 8 inv_h².
             let (scale1, scale2) = (2.0 * inv_h.max_element(), 8.0 * inv_h.max_element().powi(2));
-            let (mut worst_g, mut worst_h) = (0.0f32, 0.0f32);
+            let (mut worst_g, mut worst_h, mut worst_linear) = (0.0f32, 0.0f32, 0.0f32);
             for k in 0..4000 {
                 let u = [rng.next_1d(), rng.next_1d(), rng.next_1d()];
                 let p = point(bmin, bmax, u, k);
@@ -250,10 +245,18 @@ mod tests {
                 let dh = (h - ha).to_cols_array().map(f32::abs);
                 worst_h = worst_h.max(dh.into_iter().fold(0.0, f32::max) / scale2);
                 assert!(h == h.transpose(), "symmetric at {p}");
+                let linear = node.eval::<Grad<f32>>(Grad::seed(p));
+                assert_eq!(linear.v.to_bits(), v.to_bits(), "linearised value at {p}");
+                let gl = glam::Vec3::from(linear.g);
+                worst_linear = worst_linear.max((gl - ga).abs().max_element() / scale1);
             }
             assert!(
                 worst_g < 1e-6,
                 "case {c}: gradient off by {worst_g} of its scale"
+            );
+            assert!(
+                worst_linear < 1e-6,
+                "case {c}: linearised gradient off by {worst_linear} of its scale"
             );
             assert!(
                 worst_h < 1e-6,
