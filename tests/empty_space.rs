@@ -15,7 +15,7 @@ use implicit_psdr::math::{Aabb, Ray};
 use implicit_psdr::sampler::Sampler;
 use implicit_psdr::scene::Shape;
 use implicit_psdr::sdf::{BoxCells, EmptySpace, Sdf, bake};
-use implicit_psdr::trace::{ShapeTrace, TraceSettings};
+use implicit_psdr::trace::{ShapeTrace, TraceSettings, all_crossings_skipping};
 
 fn blob() -> Shape {
     let lobes = Sdf::union(vec![
@@ -207,6 +207,79 @@ fn tracing_finds_the_same_hits_with_and_without_skipping() {
     );
     eprintln!("hits {hits}, leaving {leaving}, grazes {grazes}");
     assert!(grazes <= 4, "{grazes} grazes found by one tracer only");
+}
+
+/// Every crossing along a line, as the surface sampler traces them (axis-aligned lines across the
+/// bounds, in the shape's frame) and along random lines through the bounds: the same crossings with and
+/// without skipping (both sides of the surface are skipped), each within the tracing tolerance.
+#[test]
+fn all_crossings_are_the_same_with_and_without_skipping() {
+    let shape = blob();
+    let space = shape.empty_space.as_deref();
+    assert!(space.is_some(), "the blob skips");
+    let settings = TraceSettings {
+        eps: 1e-4 * shape.bounds.extent().min_element(),
+        ..TraceSettings::default()
+    };
+    let b = shape.bounds;
+    let pad = 0.01 * b.extent().max_element();
+    let mut s = Sampler::new(17, 0, 0, 0);
+    let (mut crossings, mut lines_with_two) = (0, 0);
+    for i in 0..3000 {
+        let mut o = point_in_bounds(&shape, &mut s);
+        let (d, length) = if i % 2 == 0 {
+            let a = i / 2 % 3;
+            o[a] = b.min[a] - pad;
+            (Vec3::AXES[a], b.extent()[a] + 2.0 * pad)
+        } else {
+            let d = unit_vector(&mut s);
+            o -= d * 4.0;
+            (d, 8.0)
+        };
+        let ray = shape.local_ray(&Ray::new(o, d));
+        let with = all_crossings_skipping(
+            &shape.sdf,
+            shape.lipschitz,
+            space,
+            &ray,
+            0.0,
+            length,
+            &settings,
+        );
+        let without = all_crossings_skipping(
+            &shape.sdf,
+            shape.lipschitz,
+            None,
+            &ray,
+            0.0,
+            length,
+            &settings,
+        );
+        assert_eq!(with.1, None, "budget exhausted along {ray:?}");
+        assert_eq!(without.1, None, "budget exhausted along {ray:?}");
+        assert_eq!(
+            with.0.len(),
+            without.0.len(),
+            "line {ray:?}: {:?} with skipping, {:?} without",
+            with.0,
+            without.0
+        );
+        for (&ta, &tb) in with.0.iter().zip(&without.0) {
+            let p = ray.at(tb) + (o - ray.o);
+            let cos = shape.normal(p).dot(d).abs();
+            let tolerance = settings.eps_at_point(p) / cos.max(1e-3);
+            assert!(
+                (ta - tb).abs() <= tolerance,
+                "line {ray:?}: crossing at {ta} with skipping, {tb} without (|cos| {cos})"
+            );
+        }
+        crossings += with.0.len();
+        lines_with_two += usize::from(with.0.len() >= 2);
+    }
+    assert!(
+        crossings > 1000 && lines_with_two > 500,
+        "crossings {crossings}, lines crossing twice or more {lines_with_two}"
+    );
 }
 
 #[test]

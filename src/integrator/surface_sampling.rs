@@ -9,7 +9,7 @@
 //! 1. choosing an axis `a` with probability `c_a = A_a / Σ_b A_b` (one number `u_axis`);
 //! 2. choosing `q` uniformly on `F_a`, density `1 / A_a` (two numbers `u_face`);
 //! 3. tracing the line `ℓ_q = {q + t e_a}` across the box and keeping every crossing `x` of the surface
-//!    ([`crate::trace::all_crossings_checked`]).
+//!    ([`crate::trace::all_crossings_skipping`]: a grid shape skips the cells that hold no surface).
 //!
 //! # Density of a hit
 //!
@@ -65,7 +65,7 @@
 use crate::error::{Error, Result};
 use crate::math::{Aabb, Ray};
 use crate::scene::Shape;
-use crate::trace::{TraceSettings, all_crossings_checked};
+use crate::trace::{TraceSettings, all_crossings_skipping};
 use glam::{Vec2, Vec3};
 
 /// A point drawn on a surface by [`sample_surface`].
@@ -203,9 +203,10 @@ pub fn sample_surface(
     o[c] = (min[c] + u_face.y * ext[c]).min(faces.bounds.max[c]);
     let ray = Ray::new(o, Vec3::AXES[a]);
     let length = ext[a] + 2.0 * pad;
-    let (ts, exhausted) = all_crossings_checked(
+    let (ts, exhausted) = all_crossings_skipping(
         &shape.sdf,
         shape.lipschitz,
+        shape.empty_space.as_deref(),
         &shape.local_ray(&ray),
         0.0,
         length,

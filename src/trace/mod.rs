@@ -617,6 +617,26 @@ impl<'a> Marcher<'a> {
         }
     }
 
+    /// Every crossing in `[t0, t1]` in order, and where the budget ran out if it did, as
+    /// [`all_hits_checked`] reports them (the budget is per crossing searched).
+    fn all(&mut self, t0: f32) -> (Vec<f32>, Option<f32>) {
+        let mut hits = Vec::new();
+        let Some(mut side) = self.start(t0) else {
+            return (hits, None);
+        };
+        loop {
+            match self.next_crossing(side) {
+                Crossing::Hit { t, next } => {
+                    hits.push(t);
+                    side = next;
+                    self.steps_left = self.budget(side.t);
+                }
+                Crossing::Miss => return (hits, None),
+                Crossing::Exhausted(at) => return (hits, Some(at)),
+            }
+        }
+    }
+
     /// The side at `t0`, or `None` for an empty interval or a NaN value.
     fn start(&mut self, t0: f32) -> Option<Side> {
         // Rejects NaN bounds too.
@@ -765,9 +785,27 @@ pub fn all_crossings_checked(
     t1: f32,
     settings: &TraceSettings,
 ) -> (Vec<f32>, Option<f32>) {
+    all_crossings_skipping(sdf, lipschitz, None, ray, t0, t1, settings)
+}
+
+/// [`all_crossings_checked`], skipping the cells of `space` that certainly hold no surface (a grid
+/// shape's [`EmptySpace`], `ray` in the shape's frame), on either side of the surface.
+pub fn all_crossings_skipping(
+    sdf: &Sdf,
+    lipschitz: impl Into<Lipschitz>,
+    space: Option<&EmptySpace>,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    settings: &TraceSettings,
+) -> (Vec<f32>, Option<f32>) {
     match closed_form(sdf, ray, t0, t1, settings, false) {
         Some((t, count)) => (t[..count].to_vec(), None),
-        None => all_hits_checked(sdf, lipschitz, ray, t0, t1, settings),
+        None => {
+            let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
+            m.space = space.map(|s| (s, s.lattice_ray(ray)));
+            m.all(t0)
+        }
     }
 }
 
@@ -813,22 +851,7 @@ pub fn all_hits_checked(
     t1: f32,
     settings: &TraceSettings,
 ) -> (Vec<f32>, Option<f32>) {
-    let mut hits = Vec::new();
-    let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
-    let Some(mut side) = m.start(t0) else {
-        return (hits, None);
-    };
-    loop {
-        match m.next_crossing(side) {
-            Crossing::Hit { t, next } => {
-                hits.push(t);
-                side = next;
-                m.steps_left = m.budget(side.t);
-            }
-            Crossing::Miss => return (hits, None),
-            Crossing::Exhausted(at) => return (hits, Some(at)),
-        }
-    }
+    Marcher::new(sdf, lipschitz.into(), ray, t1, settings).all(t0)
 }
 
 #[cfg(test)]
