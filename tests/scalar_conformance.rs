@@ -1007,6 +1007,16 @@ fn rev_grid_sdf_matches_forward_direction() {
         // Grad<Rev>: value and spatial gradient, each swept along u.
         let gr = reverse.eval::<Grad<Rev>>(Grad::seed(p));
         let gf = spatial.eval::<Grad<DualN<1>>>(Grad::seed(p));
+        // A swept value's derivative along u, and the sum of its terms' magnitudes.
+        let along_u = |r: Rev| {
+            let (mut along, mut scale) = (0.0f64, 0.0f64);
+            Recording::sweep(r, |entry, d| {
+                let term = d as f64 * u[entry as usize - 3] as f64;
+                along += term;
+                scale += term.abs();
+            });
+            (along, scale)
+        };
         for (what, r, f) in [
             ("φ", gr.v, gf.v),
             ("∂xφ", gr.g[0], gf.g[0]),
@@ -1014,12 +1024,7 @@ fn rev_grid_sdf_matches_forward_direction() {
             ("∂zφ", gr.g[2], gf.g[2]),
         ] {
             assert_eq!(r.primal().to_bits(), f.re.to_bits(), "{what} at {p}");
-            let (mut along, mut scale) = (0.0f64, 0.0f64);
-            Recording::sweep(r, |entry, d| {
-                let term = d as f64 * u[entry as usize - 3] as f64;
-                along += term;
-                scale += term.abs();
-            });
+            let (along, scale) = along_u(r);
             assert!(
                 (along - f.eps[0] as f64).abs() <= 1e-5 * scale.max(0.1),
                 "{what} at {p}: along u reverse {along} vs forward {}",
@@ -1038,12 +1043,7 @@ fn rev_grid_sdf_matches_forward_direction() {
             + c[1] * gf.g[0].eps[0]
             + c[2] * gf.g[1].eps[0]
             + c[3] * gf.g[2].eps[0];
-        let (mut along, mut scale) = (0.0f64, 0.0f64);
-        Recording::sweep(combined, |entry, d| {
-            let term = d as f64 * u[entry as usize - 3] as f64;
-            along += term;
-            scale += term.abs();
-        });
+        let (along, scale) = along_u(combined);
         assert!(
             (along - want as f64).abs() <= 1e-5 * scale.max(0.1),
             "the four at {p}: along u reverse {along} vs forward {want}"

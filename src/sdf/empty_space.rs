@@ -118,9 +118,11 @@ impl EmptySpace {
                 }
                 let cells = data.dims.map(|n| n - 1);
                 let scale = glam::Vec3::from(cells.map(|c| c as f32)) / ext;
-                let patches = grid::patch_lipschitz(data, *bbox_min, *bbox_max, level.value);
+                let (extended, _) = grid::extended_lattice(data);
+                let patches =
+                    grid::patch_lipschitz(data, &extended, *bbox_min, *bbox_max, level.value);
                 let straddling: Vec<bool> = patches.iter().map(|p| p.straddling).collect();
-                let curvature = grid::patch_curvature(data, *bbox_min, *bbox_max);
+                let curvature = grid::patch_curvature(data, &extended, *bbox_min, *bbox_max);
                 Some(Self {
                     to_lattice: glam::Mat3::from_diagonal(scale),
                     offset: -*bbox_min * scale,

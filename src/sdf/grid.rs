@@ -300,7 +300,7 @@ fn extended(data: &GridData, x: isize, y: isize, z: isize) -> f32 {
 }
 
 /// The ghost-extended lattice (`(nx + 2)(ny + 2)(nz + 2)` values, x fastest) and its dimensions.
-fn extended_lattice(data: &GridData) -> (Vec<f32>, [usize; 3]) {
+pub(super) fn extended_lattice(data: &GridData) -> (Vec<f32>, [usize; 3]) {
     let [nx, ny, nz] = data.dims;
     let e = [nx + 2, ny + 2, nz + 2];
     let mut out = Vec::with_capacity(e[0] * e[1] * e[2]);
@@ -433,7 +433,7 @@ pub(super) fn lipschitz_sided(
         return (1.0, 1.0);
     }
     let (mut outside, mut inside) = (0.0f32, 0.0f32);
-    for patch in patch_lipschitz(data, bmin, bmax, level) {
+    for patch in patch_lipschitz(data, &extended_lattice(data).0, bmin, bmax, level) {
         if patch.outside {
             outside = outside.max(patch.bound);
         }
@@ -463,14 +463,16 @@ pub(super) struct PatchLipschitz {
     pub straddling: bool,
 }
 
-/// [`PatchLipschitz`] of every patch (lattice cell), x fastest. `data` must be usable.
+/// [`PatchLipschitz`] of every patch (lattice cell), x fastest, from `data`'s [`extended_lattice`]
+/// `values`. `data` must be usable.
 pub(super) fn patch_lipschitz(
     data: &GridData,
+    values: &[f32],
     bmin: glam::Vec3,
     bmax: glam::Vec3,
     level: f32,
 ) -> Vec<PatchLipschitz> {
-    let (values, e) = extended_lattice(data);
+    let e = data.dims.map(|n| n + 2);
     let ext = bmax - bmin;
     let patch_dims = data.dims.map(|n| n - 1);
     let windows =
@@ -526,7 +528,7 @@ pub(super) fn patch_lipschitz(
 }
 
 /// A bound of the spline's second derivative along any unit direction, `|dᵀ H d| ≤ M`, over each patch
-/// (lattice cell), x fastest; `data` must be usable.
+/// (lattice cell), x fastest, from `data`'s [`extended_lattice`] `values`; `data` must be usable.
 ///
 /// On a patch, `∂_a∂_a φ` is a linear-by-cubic-by-cubic B-spline whose control points are the patch's
 /// second differences `Δ_a² c / h_a²`, and `∂_a∂_b φ` (a ≠ b) a quadratic-by-quadratic-by-cubic one of
@@ -534,8 +536,13 @@ pub(super) fn patch_lipschitz(
 /// of those. Then `|dᵀ H d| ≤ Σ_ab |d_a| |d_b| B_ab ≤ max_a Σ_b B_ab` (the largest row sum bounds the
 /// spectral norm of the non-negative matrix `B`). A few ulps of headroom are added. Inside the box
 /// only: beyond it the distance to the box adds its own curvature.
-pub(super) fn patch_curvature(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3) -> Vec<f32> {
-    let (values, e) = extended_lattice(data);
+pub(super) fn patch_curvature(
+    data: &GridData,
+    values: &[f32],
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+) -> Vec<f32> {
+    let e = data.dims.map(|n| n + 2);
     let ext = bmax - bmin;
     let patch_dims = data.dims.map(|n| n - 1);
     let inv_h: [f32; 3] = std::array::from_fn(|a| inv_spacing(data.dims[a], ext[a]));

@@ -172,7 +172,8 @@ mod tests {
             let Sdf::Grid { data, .. } = &node else {
                 unreachable!()
             };
-            let bound = crate::sdf::grid::patch_curvature(data, bmin, bmax);
+            let (extended, _) = crate::sdf::grid::extended_lattice(data);
+            let bound = crate::sdf::grid::patch_curvature(data, &extended, bmin, bmax);
             let cells = dims.map(|n| n - 1);
             let size = (bmax - bmin) / glam::Vec3::from(cells.map(|n| n as f32));
             let mut tightest = 0.0f32;
