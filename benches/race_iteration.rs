@@ -6,12 +6,16 @@
 //! The optimised grid is the target's shape (the smooth union of `target.json`) baked over the
 //! grid's box at `N³` (`--grid N`, default 16; the race refines 16 → 31 → 61), so that the silhouette
 //! and the tracing cost are those of a shape near the end of each stage. Targets: the target scene at
-//! 64 spp.
+//! 64 spp (`--targets-spp`).
 //!
 //! Prints per iteration (summed over the 6 views) the seconds of the primal renders, the loss passes,
 //! the interior, primary and secondary terms, and each as a ratio to the primal.
 //!
 //! `cargo bench --bench race_iteration [-- --grid 61] [-- REPS]`.
+//!
+//! To profile the iteration alone (`perf record` on the bench's executable), `--targets-spp 1` renders
+//! the targets at 1 spp and `--no-primal` skips the primal renders (the table then has no ratios):
+//! almost all of the process's samples are then the six views' loss passes and gradients.
 
 use implicit_psdr::integrator::{DiffOptions, RenderOptions, loss_gradient, render};
 use implicit_psdr::optimize::Optimization;
@@ -34,8 +38,12 @@ fn main() {
     let grid: usize = (args.iter().position(|a| a == "--grid"))
         .and_then(|i| args.get(i + 1)?.parse().ok())
         .unwrap_or(16);
+    let targets_spp: u32 = (args.iter().position(|a| a == "--targets-spp"))
+        .and_then(|i| args.get(i + 1)?.parse().ok())
+        .unwrap_or(64);
+    let primal = !args.iter().any(|a| a == "--no-primal");
     let reps: usize = (args.iter().enumerate())
-        .filter(|(i, _)| *i == 0 || args[i - 1] != "--grid")
+        .filter(|(i, _)| *i == 0 || !matches!(args[i - 1].as_str(), "--grid" | "--targets-spp"))
         .find_map(|(_, a)| a.parse().ok())
         .unwrap_or(3);
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -54,7 +62,7 @@ fn main() {
     let targets: Vec<_> = (cfg.views.iter().enumerate())
         .map(|(k, v)| {
             let options = RenderOptions {
-                spp: 64,
+                spp: targets_spp,
                 seed: 1000 + k as u64,
                 ..RenderOptions::default()
             };
@@ -93,9 +101,11 @@ fn main() {
                 },
                 ..DiffOptions::default()
             };
-            let t = Instant::now();
-            black_box(render(&scene, &options.render));
-            row[0] += t.elapsed().as_secs_f64();
+            if primal {
+                let t = Instant::now();
+                black_box(render(&scene, &options.render));
+                row[0] += t.elapsed().as_secs_f64();
+            }
             let t = Instant::now();
             let g = loss_gradient(
                 &scene,
@@ -122,13 +132,18 @@ fn main() {
         "secondary term",
         "loss + gradient",
     ];
+    let ratio_column = if primal { "/ primal" } else { "" };
     println!(
         "{:<20} {:>10} {:>10}",
-        "per iteration", "median s", "/ primal"
+        "per iteration", "median s", ratio_column
     );
     for (k, name) in names.iter().enumerate() {
         let seconds = median(rows.iter().map(|r| r[k]).collect());
-        let ratio = median(rows.iter().map(|r| r[k] / r[0]).collect());
-        println!("{name:<20} {seconds:>10.3} {ratio:>10.2}");
+        if primal {
+            let ratio = median(rows.iter().map(|r| r[k] / r[0]).collect());
+            println!("{name:<20} {seconds:>10.3} {ratio:>10.2}");
+        } else if k > 0 {
+            println!("{name:<20} {seconds:>10.3}");
+        }
     }
 }
