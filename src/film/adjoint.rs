@@ -50,8 +50,9 @@ pub struct AdjointTile<'a> {
     sum: Rev,
     shares: Vec<(u32, f32)>,
     gradient: Vec<f32>,
-    /// The entries of `gradient` that were zero when a share reached them (each entry at least once
-    /// among those it holds; one may repeat if its sum returned to zero).
+    /// The entries this item gave a share, each listed when a share reached it while it was zero (so
+    /// every non-zero entry of `gradient` is listed, and one whose sum returned to zero may be listed
+    /// twice).
     touched: Vec<u32>,
     invalid: u64,
     needed: Option<Arc<[bool]>>,
