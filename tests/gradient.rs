@@ -782,6 +782,39 @@ fn gradient_is_identical_across_thread_counts() {
     }
 }
 
+/// [`loss_gradient`] (its loss pass, then the adjoint pass) is just as deterministic: the loss and
+/// the gradient bit for bit the same with 1, 2 and 3 threads, and its image bit for bit the image
+/// [`render`] makes with the same seed.
+#[test]
+fn loss_gradient_is_identical_across_thread_counts() {
+    let size = 16;
+    let scene = grid_scene("threads-loss", PATH, size, 10, true);
+    let target = image(&scene.with_parameter("blob.level", 0.03).unwrap(), 16, 5);
+    let layout =
+        GradientLayout::select(&scene, &names(&PATH_PARAMS), &["blob".to_string()]).unwrap();
+    let options = options(4, 9, 2, 4, Normalization::default());
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| loss_gradient(&scene, &layout, &target, Loss::L2, &options).unwrap())
+    };
+    let one = run(1);
+    assert!(one.gradient.interior.iter().any(|v| *v != 0.0));
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&one.image.rgb), bits(&image(&scene, 4, 9).rgb));
+    for threads in [2, 3] {
+        let other = run(threads);
+        for ((term, a), (_, b)) in terms(&one.gradient).into_iter().zip(terms(&other.gradient)) {
+            let a: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
+            let b: Vec<u64> = b.iter().map(|v| v.to_bits()).collect();
+            assert_eq!(a, b, "{term}: 1 thread vs {threads}");
+        }
+        assert_eq!(one.loss.to_bits(), other.loss.to_bits());
+    }
+}
+
 // ---------------------------------------------------------------------------------------------------
 // 5. Hard cases
 
