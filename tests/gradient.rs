@@ -749,6 +749,28 @@ fn loss_gradient_matches_finite_differences() {
 // ---------------------------------------------------------------------------------------------------
 // 4. Determinism
 
+/// `work`'s result on a pool of `threads` threads (unwrapped).
+fn with_threads<T: Send>(
+    threads: usize,
+    work: impl FnOnce() -> implicit_psdr::error::Result<T> + Send,
+) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(work)
+        .unwrap()
+}
+
+/// Asserts that every term of `other` (run on `threads` threads) is bit for bit `one`'s (1 thread).
+fn assert_same_bits(one: &Gradient, other: &Gradient, threads: usize) {
+    for ((term, a), (_, b)) in terms(one).into_iter().zip(terms(other)) {
+        let a: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
+        let b: Vec<u64> = b.iter().map(|v| v.to_bits()).collect();
+        assert_eq!(a, b, "{term}: 1 thread vs {threads}");
+    }
+}
+
 /// Work items are merged in item order whatever the thread that ran them, so the gradient (every term,
 /// every entry) is bit for bit the same with 1, 2 and 3 threads (3 changes the merge waves too).
 #[test]
@@ -759,22 +781,12 @@ fn gradient_is_identical_across_thread_counts() {
         GradientLayout::select(&scene, &names(&PATH_PARAMS), &["blob".to_string()]).unwrap();
     let g = adjoint(size, size, 8);
     let options = options(2, 9, 2, 4, Normalization::default());
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| render_gradient(&scene, &layout, &g, &options).unwrap())
-    };
+    let run = |threads| with_threads(threads, || render_gradient(&scene, &layout, &g, &options));
     let one = run(1);
     assert!(one.total().iter().any(|v| *v != 0.0));
     for threads in [2, 3] {
         let other = run(threads);
-        for ((term, a), (_, b)) in terms(&one).into_iter().zip(terms(&other)) {
-            let a: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
-            let b: Vec<u64> = b.iter().map(|v| v.to_bits()).collect();
-            assert_eq!(a, b, "{term}: 1 thread vs {threads}");
-        }
+        assert_same_bits(&one, &other, threads);
         assert_eq!(
             one.stats.invalid_derivatives,
             other.stats.invalid_derivatives
@@ -793,12 +805,10 @@ fn loss_gradient_is_identical_across_thread_counts() {
     let layout =
         GradientLayout::select(&scene, &names(&PATH_PARAMS), &["blob".to_string()]).unwrap();
     let options = options(4, 9, 2, 4, Normalization::default());
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| loss_gradient(&scene, &layout, &target, Loss::L2, &options).unwrap())
+    let run = |threads| {
+        with_threads(threads, || {
+            loss_gradient(&scene, &layout, &target, Loss::L2, &options)
+        })
     };
     let one = run(1);
     assert!(one.gradient.interior.iter().any(|v| *v != 0.0));
@@ -806,11 +816,7 @@ fn loss_gradient_is_identical_across_thread_counts() {
     assert_eq!(bits(&one.image.rgb), bits(&image(&scene, 4, 9).rgb));
     for threads in [2, 3] {
         let other = run(threads);
-        for ((term, a), (_, b)) in terms(&one.gradient).into_iter().zip(terms(&other.gradient)) {
-            let a: Vec<u64> = a.iter().map(|v| v.to_bits()).collect();
-            let b: Vec<u64> = b.iter().map(|v| v.to_bits()).collect();
-            assert_eq!(a, b, "{term}: 1 thread vs {threads}");
-        }
+        assert_same_bits(&one.gradient, &other.gradient, threads);
         assert_eq!(one.loss.to_bits(), other.loss.to_bits());
     }
 }
