@@ -21,7 +21,7 @@
 
 use super::lattice::{LatticeTaps, lattice_sum_f32};
 use super::{Scalar, Slot, rules};
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// The index of a constant.
@@ -41,12 +41,12 @@ pub struct Rev {
     i: u32,
 }
 
-/// One thread's tape: per node the end of its operand list, and the operands (node index or
-/// `PARAM | entry`, with its partial), side by side in one buffer (one push per operand, and the sweep
-/// reads both from one cache line).
+/// One thread's tape: one buffer in which each node is its operands (node index or `PARAM | entry`,
+/// with its partial) followed by a header holding their count; a node's index is its header's
+/// position. One push per operand and one per node into one buffer, and the sweep walks it backwards
+/// reading each node's operands from the same cache lines as its header.
 struct Tape {
-    ends: Vec<u32>,
-    operands: Vec<(u32, f32)>,
+    entries: Vec<(u32, f32)>,
     lattices: Vec<LatticeRecord>,
     adjoints: Vec<f32>,
     active: bool,
@@ -75,8 +75,7 @@ impl LatticeRecord {
 thread_local! {
     static TAPE: RefCell<Tape> = const {
         RefCell::new(Tape {
-            ends: Vec::new(),
-            operands: Vec::new(),
+            entries: Vec::new(),
             lattices: Vec::new(),
             adjoints: Vec::new(),
             active: false,
@@ -84,15 +83,40 @@ thread_local! {
     };
 }
 
+thread_local! {
+    /// This thread's tape while a recording is active and no borrow of [`TAPE`] is alive (null
+    /// otherwise): what the recording of one operation reads, one thread-local access with neither
+    /// a destructor's state nor a borrow flag to check.
+    static ACTIVE: Cell<*mut Tape> = const { Cell::new(std::ptr::null_mut()) };
+}
+
+/// Runs `f` on this thread's tape: through [`ACTIVE`] during a recording, else through the
+/// `RefCell` (which then refuses a nested borrow, as during a sweep's callback).
+#[inline(always)]
+fn with_tape<R>(f: impl FnOnce(&mut Tape) -> R) -> R {
+    let active = ACTIVE.with(Cell::get);
+    if active.is_null() {
+        TAPE.with(|t| f(&mut t.borrow_mut()))
+    } else {
+        // SAFETY: `ACTIVE` points into this thread's `TAPE` (alive as long as the thread) only
+        // between `Recording::start` and the recording's drop, and `Recording::sweep` clears it
+        // while it holds the `RefCell`'s borrow; every `f` here is this module's own bookkeeping,
+        // which calls no code that could reach the tape again, so this is its only reference.
+        f(unsafe { &mut *active })
+    }
+}
+
 impl Tape {
+    /// Closes the node whose operands were pushed since `start` (the entries' length before them).
     #[inline(always)]
-    fn node(&mut self) -> u32 {
-        self.ends.push(self.operands.len() as u32);
-        (self.ends.len() - 1) as u32
+    fn node(&mut self, start: usize) -> u32 {
+        let i = self.entries.len();
+        self.entries.push(((i - start) as u32, 0.0));
+        i as u32
     }
     #[inline(always)]
     fn operand(&mut self, target: u32, partial: f32) {
-        self.operands.push((target, partial));
+        self.entries.push((target, partial));
     }
 }
 
@@ -128,14 +152,14 @@ impl Rev {
         if operands.iter().all(|(x, _)| x.i == CONSTANT) {
             return Self::new(v);
         }
-        TAPE.with(|t| {
-            let mut t = t.borrow_mut();
+        with_tape(|t| {
+            let start = t.entries.len();
             for &(x, d) in operands {
                 if x.i != CONSTANT {
                     t.operand(x.i, d);
                 }
             }
-            let i = t.node();
+            let i = t.node(start);
             Self { v, i }
         })
     }
@@ -169,8 +193,7 @@ pub struct Recording {
 /// A position on the tape to rewind to ([`Recording::mark`]).
 #[derive(Copy, Clone, Debug, Default)]
 pub struct Mark {
-    nodes: usize,
-    operands: usize,
+    entries: usize,
     lattices: usize,
 }
 
@@ -180,17 +203,18 @@ impl Recording {
     /// Panics if a recording is already active on this thread: two interleaved recordings would
     /// corrupt each other's tape (a parallel task must not start inside a recording).
     pub fn start() -> Self {
-        TAPE.with(|t| {
-            let mut t = t.borrow_mut();
+        TAPE.with(|cell| {
+            let mut t = cell.borrow_mut();
             assert!(
                 !t.active,
                 "a reverse-mode recording is already active on this thread (was a parallel task \
                  started inside a recording?)"
             );
             t.active = true;
-            t.ends.clear();
-            t.operands.clear();
+            t.entries.clear();
             t.lattices.clear();
+            drop(t);
+            ACTIVE.set(cell.as_ptr());
         });
         Self {
             _thread: std::marker::PhantomData,
@@ -204,29 +228,24 @@ impl Recording {
 
     /// The current end of this thread's tape.
     pub fn mark() -> Mark {
-        TAPE.with(|t| {
-            let t = t.borrow();
-            Mark {
-                nodes: t.ends.len(),
-                operands: t.operands.len(),
-                lattices: t.lattices.len(),
-            }
+        with_tape(|t| Mark {
+            entries: t.entries.len(),
+            lattices: t.lattices.len(),
         })
     }
 
     /// Forgets every node recorded after `mark` (values computed since then become invalid).
     pub fn rewind(mark: Mark) {
-        TAPE.with(|t| {
-            let mut t = t.borrow_mut();
-            t.ends.truncate(mark.nodes);
-            t.operands.truncate(mark.operands);
+        with_tape(|t| {
+            t.entries.truncate(mark.entries);
             t.lattices.truncate(mark.lattices);
         });
     }
 
-    /// Nodes on this thread's tape now (for memory accounting).
+    /// Entries (operands and node headers, 8 bytes each) on this thread's tape now (for memory
+    /// accounting).
     pub fn len() -> usize {
-        TAPE.with(|t| t.borrow().ends.len())
+        TAPE.with(|t| t.borrow().entries.len())
     }
 
     /// The gradient of `root`: calls `out(entry, ∂root/∂parameter)` for every parameter operand reached
@@ -241,29 +260,29 @@ impl Recording {
             out(root.i & !PARAM, 1.0);
             return;
         }
+        // `out` is the caller's code: while it may run, operations go through the borrowed
+        // `RefCell` (and are refused), never through `ACTIVE`.
+        let active = ACTIVE.replace(std::ptr::null_mut());
         TAPE.with(|t| {
             let t = &mut *t.borrow_mut();
-            let n = root.i as usize + 1;
             let Tape {
-                ends,
-                operands,
+                entries,
                 lattices,
                 adjoints,
                 ..
             } = t;
+            let n = root.i as usize + 1;
             adjoints.clear();
             adjoints.resize(n, 0.0);
             adjoints[n - 1] = 1.0;
-            let mut end = ends[n - 1] as usize;
-            for node in (0..n).rev() {
-                let start = if node == 0 {
-                    0
-                } else {
-                    ends[node - 1] as usize
-                };
-                let a = adjoints[node];
+            // Nodes in reverse order, each node's operands in the order recorded.
+            let mut end = n;
+            while end > 0 {
+                let header = end - 1;
+                let start = header - entries[header].0 as usize;
+                let a = adjoints[header];
                 if a != 0.0 {
-                    for &(target, partial) in &operands[start..end] {
+                    for &(target, partial) in &entries[start..header] {
                         let d = a * partial;
                         if target & PARAM != 0 {
                             out(target & !PARAM, d);
@@ -276,6 +295,7 @@ impl Recording {
             }
             expand_lattices(lattices, adjoints, &mut out);
         });
+        ACTIVE.set(active);
     }
 }
 
@@ -324,11 +344,11 @@ fn expand_lattices(lattices: &[LatticeRecord], adjoints: &[f32], out: &mut impl 
 
 impl Drop for Recording {
     fn drop(&mut self) {
+        ACTIVE.set(std::ptr::null_mut());
         TAPE.with(|t| {
             let mut t = t.borrow_mut();
             t.active = false;
-            t.ends.clear();
-            t.operands.clear();
+            t.entries.clear();
             t.lattices.clear();
         });
     }
@@ -486,14 +506,14 @@ impl Scalar for Rev {
         if terms.is_empty() {
             return Self::new(0.0);
         }
-        TAPE.with(|t| {
-            let mut t = t.borrow_mut();
+        with_tape(|t| {
+            let start = t.entries.len();
             for &(i, w) in terms {
                 let entry = first as usize + i;
                 debug_assert!(entry <= MAX_GRADIENT_ENTRY as usize);
                 t.operand(PARAM | entry as u32, w);
             }
-            let i = t.node();
+            let i = t.node(start);
             Self { v: 0.0, i }
         })
     }
@@ -525,8 +545,8 @@ impl Scalar for Rev {
         }
         let [ix, iy, iz] = taps.index;
         let [wx, wy, wz] = primal.weight;
-        TAPE.with(|t| {
-            let mut t = t.borrow_mut();
+        with_tape(|t| {
+            let start = t.entries.len();
             if moving {
                 // ∂/∂w_axis[k]: the sum with that axis's weights replaced by the unit vector e_k,
                 // i.e. the values contracted with the other two axes' weights.
@@ -551,7 +571,7 @@ impl Scalar for Rev {
                     }
                 }
             }
-            let i = t.node();
+            let i = t.node(start);
             if let Some(first) = block {
                 debug_assert!(
                     first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
@@ -631,6 +651,39 @@ mod tests {
                 (r - f).abs() <= 1e-5 * f.abs().max(1.0),
                 "weight {k}: {r} vs {f}"
             );
+        }
+    }
+
+    /// The sweep's callback is the caller's code: an operation recorded from it is refused (the tape
+    /// is borrowed), never written through the recording's fast path under the sweep's feet.
+    #[test]
+    #[should_panic(expected = "already borrowed")]
+    fn an_operation_inside_the_sweep_callback_is_refused() {
+        let _recording = Recording::start();
+        let x = Rev::parameter(2.0, 0);
+        let y = x * x;
+        Recording::sweep(y, |_, d| {
+            let _ = Rev::parameter(d, 1) * x;
+        });
+    }
+
+    /// Samples recorded one after another on one recording, rewound in between, each get their own
+    /// gradient (the fast path is restored after a sweep).
+    #[test]
+    fn rewound_samples_get_their_own_gradients() {
+        let _recording = Recording::start();
+        for k in 1..4 {
+            let mark = Recording::mark();
+            let x = Rev::parameter(k as f32, 0);
+            let y = x * x * x + x * 2.0;
+            let mut g = 0.0;
+            Recording::sweep(y, |e, d| {
+                assert_eq!(e, 0);
+                g += d;
+            });
+            assert_eq!(g, 3.0 * (k * k) as f32 + 2.0);
+            Recording::rewind(mark);
+            assert_eq!(Recording::len(), 0);
         }
     }
 
