@@ -42,13 +42,13 @@ pub struct Rev {
 }
 
 /// One thread's tape: one buffer in which each node is its operands (node index or `PARAM | entry`,
-/// with its partial) followed by a header holding their count; a node's index is its header's
-/// position. One push per operand and one per node into one buffer, and the sweep walks it backwards
-/// reading each node's operands from the same cache lines as its header.
+/// with its partial) followed by a header holding their count and the node's adjoint (0 outside a
+/// sweep); a node's index is its header's position. One push per operand and one per node into one
+/// buffer, and the sweep walks it backwards, reading each node's operands from the same cache lines
+/// as its header and accumulating adjoints in place (no array to clear per sweep).
 struct Tape {
     entries: Vec<(u32, f32)>,
     lattices: Vec<LatticeRecord>,
-    adjoints: Vec<f32>,
     active: bool,
 }
 
@@ -57,6 +57,8 @@ struct Tape {
 #[derive(Copy, Clone, Debug)]
 struct LatticeRecord {
     node: u32,
+    /// The node's adjoint, set by the sweep that reached it.
+    adjoint: f32,
     first: u32,
     nx: u32,
     ny: u32,
@@ -77,7 +79,6 @@ thread_local! {
         RefCell::new(Tape {
             entries: Vec::new(),
             lattices: Vec::new(),
-            adjoints: Vec::new(),
             active: false,
         })
     };
@@ -266,34 +267,39 @@ impl Recording {
         TAPE.with(|t| {
             let t = &mut *t.borrow_mut();
             let Tape {
-                entries,
-                lattices,
-                adjoints,
-                ..
+                entries, lattices, ..
             } = t;
             let n = root.i as usize + 1;
-            adjoints.clear();
-            adjoints.resize(n, 0.0);
-            adjoints[n - 1] = 1.0;
-            // Nodes in reverse order, each node's operands in the order recorded.
+            // The lattice records of nodes up to the root, in node order, as the nodes are.
+            let reached = lattices.partition_point(|r| (r.node as usize) < n);
+            let lattices = &mut lattices[..reached];
+            let mut pending = reached;
+            entries[n - 1].1 = 1.0;
+            // Nodes in reverse order, each node's operands in the order recorded; every header up to
+            // the root is visited and its adjoint taken, so all are 0 again after the sweep.
             let mut end = n;
             while end > 0 {
                 let header = end - 1;
                 let start = header - entries[header].0 as usize;
-                let a = adjoints[header];
+                let a = std::mem::take(&mut entries[header].1);
+                while pending > 0 && lattices[pending - 1].node as usize == header {
+                    pending -= 1;
+                    lattices[pending].adjoint = a;
+                }
                 if a != 0.0 {
-                    for &(target, partial) in &entries[start..header] {
+                    for k in start..header {
+                        let (target, partial) = entries[k];
                         let d = a * partial;
                         if target & PARAM != 0 {
                             out(target & !PARAM, d);
                         } else {
-                            adjoints[target as usize] += d;
+                            entries[target as usize].1 += d;
                         }
                     }
                 }
                 end = start;
             }
-            expand_lattices(lattices, adjoints, &mut out);
+            expand_lattices(lattices, &mut out);
         });
         ACTIVE.set(active);
     }
@@ -303,7 +309,7 @@ impl Recording {
 /// final: consecutive records over the same taps (the value and gradient sums of one lookup) are summed
 /// into one 4×4×4 array first, so each value of a lookup is reported once. Records with a zero adjoint
 /// are skipped, as nodes are.
-fn expand_lattices(lattices: &[LatticeRecord], adjoints: &[f32], out: &mut impl FnMut(u32, f32)) {
+fn expand_lattices(lattices: &[LatticeRecord], out: &mut impl FnMut(u32, f32)) {
     let mut shares = [[[0.0f32; 4]; 4]; 4];
     let mut pending: Option<&LatticeRecord> = None;
     let flush =
@@ -319,7 +325,7 @@ fn expand_lattices(lattices: &[LatticeRecord], adjoints: &[f32], out: &mut impl 
             }
         };
     for r in lattices {
-        let a = adjoints.get(r.node as usize).copied().unwrap_or(0.0);
+        let a = r.adjoint;
         if a == 0.0 {
             continue;
         }
@@ -579,6 +585,7 @@ impl Scalar for Rev {
                 );
                 t.lattices.push(LatticeRecord {
                     node: i,
+                    adjoint: 0.0,
                     first,
                     nx: nx as u32,
                     ny: ny as u32,
@@ -665,6 +672,25 @@ mod tests {
         Recording::sweep(y, |_, d| {
             let _ = Rev::parameter(d, 1) * x;
         });
+    }
+
+    /// A sweep leaves the tape as it found it: sweeping the same root twice, or an earlier node after a
+    /// later one, gives each its own gradient (the adjoints accumulated in the nodes are cleared).
+    #[test]
+    fn sweeps_of_one_recording_are_independent() {
+        let _recording = Recording::start();
+        let x = Rev::parameter(3.0, 0);
+        let y = x * x;
+        let z = y * x + x;
+        let grad = |root: Rev| {
+            let mut g = 0.0;
+            Recording::sweep(root, |_, d| g += d);
+            g
+        };
+        assert_eq!(grad(z), 28.0);
+        assert_eq!(grad(z), 28.0);
+        assert_eq!(grad(y), 6.0);
+        assert_eq!(grad(z), 28.0);
     }
 
     /// Samples recorded one after another on one recording, rewound in between, each get their own
