@@ -249,6 +249,12 @@ impl<S: Scalar> Scalar for Grad<S> {
         if block.is_none() {
             return lattice_sum_nested(taps, values, dims[0], dims[1]);
         }
+        if let Some((fixed, deriv)) = axis_aligned_constant(taps)
+            && let Some([v, gx, gy, gz]) =
+                S::lattice_sum_with_gradient(&fixed, &deriv, values, dims, block)
+        {
+            return Self { v, g: [gx, gy, gz] };
+        }
         let part = |deriv: Option<(usize, usize)>| {
             let t = taps.map(|a, w| match deriv {
                 Some((axis, i)) if axis == a => w.g[i],
@@ -263,4 +269,29 @@ impl<S: Scalar> Scalar for Grad<S> {
             }),
         }
     }
+}
+
+/// The primal weights of `taps` and each axis's weights' derivative along that axis, when every
+/// weight and derivative is a constant, no axis's weights move along another axis (exact zeros, as
+/// for a point seeded in space only, unrotated) and no axis's own derivatives are all zero;
+/// otherwise `None`.
+fn axis_aligned_constant<S: Scalar>(
+    taps: &LatticeTaps<Grad<S>>,
+) -> Option<(LatticeTaps<f32>, [[f32; 4]; 3])> {
+    let mut deriv = [[0.0f32; 4]; 3];
+    for (a, weights) in taps.weight.iter().enumerate() {
+        for (k, w) in weights.iter().enumerate() {
+            if !w.v.is_constant() || !w.g.iter().all(|g| g.is_constant()) {
+                return None;
+            }
+            if (0..3).any(|i| i != a && w.g[i].primal() != 0.0) {
+                return None;
+            }
+            deriv[a][k] = w.g[a].primal();
+        }
+        if deriv[a].iter().all(|&d| d == 0.0) {
+            return None;
+        }
+    }
+    Some((taps.map(|_, w| w.v.primal()), deriv))
 }

@@ -113,3 +113,48 @@ pub fn lattice_sum_f32(taps: &LatticeTaps<f32>, values: &[f32], nx: usize, ny: u
     let r = acc.to_array();
     wx[0] * r[0] + wx[1] * r[1] + wx[2] * r[2] + wx[3] * r[3]
 }
+
+/// The four sums a spatially seeded lookup needs, at once: [`lattice_sum_f32`] with `taps`' weights,
+/// then with the x, the y and the z weights replaced by `deriv[0]`, `deriv[1]` and `deriv[2]` (the
+/// weights' derivatives along their own axis), each bit for bit as [`lattice_sum_f32`] computes it
+/// (the value shares its y and z sums with the x derivative and its y sums with the z derivative).
+/// `None` unless the x taps are consecutive.
+#[inline(always)]
+pub fn lattice_sums_with_derivatives_f32(
+    taps: &LatticeTaps<f32>,
+    deriv: &[[f32; 4]; 3],
+    values: &[f32],
+    nx: usize,
+    ny: usize,
+) -> Option<[f32; 4]> {
+    let [ix, iy, iz] = taps.index;
+    let [wx, wy, wz] = taps.weight;
+    let [dx, dy, dz] = *deriv;
+    let x0 = ix[0];
+    if ix != [x0, x0 + 1, x0 + 2, x0 + 3] {
+        return None;
+    }
+    let (mut acc, mut acc_dy, mut acc_dz) = (glam::Vec4::ZERO, glam::Vec4::ZERO, glam::Vec4::ZERO);
+    for c in 0..4 {
+        let (mut acc_y, mut acc_y_dy) = (glam::Vec4::ZERO, glam::Vec4::ZERO);
+        for b in 0..4 {
+            let row = (iz[c] * ny + iy[b]) * nx + x0;
+            let v = glam::Vec4::from_slice(&values[row..row + 4]);
+            acc_y += v * wy[b];
+            acc_y_dy += v * dy[b];
+        }
+        acc += acc_y * wz[c];
+        acc_dy += acc_y_dy * wz[c];
+        acc_dz += acc_y * dz[c];
+    }
+    let contract = |w: [f32; 4], r: glam::Vec4| {
+        let r = r.to_array();
+        w[0] * r[0] + w[1] * r[1] + w[2] * r[2] + w[3] * r[3]
+    };
+    Some([
+        contract(wx, acc),
+        contract(dx, acc),
+        contract(wx, acc_dy),
+        contract(wx, acc_dz),
+    ])
+}

@@ -197,6 +197,24 @@ pub trait Scalar:
         lattice_sum_nested(taps, values, dims[0], dims[1])
     }
 
+    /// A lookup at a point fixed in everything but space, in a block differentiated in reverse mode:
+    /// the value and the spatial gradient `[v, g_x, g_y, g_z]` that `Grad<Self>`'s
+    /// [`Scalar::lattice_sum`] would give for constant weights `taps` whose derivative along axis
+    /// `a` is `deriv[a]` for axis `a`'s own weights and 0 for the others', with the same primal bits
+    /// and the same derivatives; `None` to let it take its generic path (the default, and for any
+    /// type but [`Rev`], which computes the four sums in one pass).
+    #[inline(always)]
+    fn lattice_sum_with_gradient(
+        taps: &LatticeTaps<f32>,
+        deriv: &[[f32; 4]; 3],
+        values: &[f32],
+        dims: [usize; 3],
+        block: Slot,
+    ) -> Option<[Self; 4]> {
+        let _ = (taps, deriv, values, dims, block);
+        None
+    }
+
     /// The derivative part of a lookup in a parameter block differentiated in reverse mode: a number
     /// whose primal is 0 and whose derivative with respect to value `i` of the block whose first
     /// gradient entry is `first` is `w` for each `(i, w)` of `terms` (a texture's trilinear weights).

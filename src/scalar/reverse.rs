@@ -19,7 +19,7 @@
 //! (as when a rayon task, started from inside a recording, is stolen by the recording thread):
 //! [`Recording::start`] refuses to start while one is active.
 
-use super::lattice::{LatticeTaps, lattice_sum_f32};
+use super::lattice::{LatticeTaps, lattice_sum_f32, lattice_sums_with_derivatives_f32};
 use super::{Scalar, Slot, rules};
 use std::cell::{Cell, RefCell};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -507,6 +507,48 @@ impl Scalar for Rev {
         self.unary(rules::sqr(self.v))
     }
 
+    /// Four lattice nodes (no operands: the weights are constants), the sums computed in one pass; the
+    /// gradient's primals are those of the generic path, which adds two constant zero parts to each.
+    fn lattice_sum_with_gradient(
+        taps: &LatticeTaps<f32>,
+        deriv: &[[f32; 4]; 3],
+        values: &[f32],
+        dims: [usize; 3],
+        block: Slot,
+    ) -> Option<[Self; 4]> {
+        let first = block?;
+        let [nx, ny, _] = dims;
+        let [v, px, py, pz] = lattice_sums_with_derivatives_f32(taps, deriv, values, nx, ny)?;
+        debug_assert!(
+            first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
+            "the block's gradient entries overflow"
+        );
+        let [wx, wy, wz] = taps.weight;
+        let [dx, dy, dz] = *deriv;
+        let index = taps.index.map(|axis| axis.map(|k| k as u32));
+        with_tape(|t| {
+            let mut node = |v: f32, weight: [[f32; 4]; 3]| {
+                let i = t.node(t.entries.len());
+                t.lattices.push(LatticeRecord {
+                    node: i,
+                    adjoint: 0.0,
+                    first,
+                    nx: nx as u32,
+                    ny: ny as u32,
+                    index,
+                    weight,
+                });
+                Self { v, i }
+            };
+            Some([
+                node(v, [wx, wy, wz]),
+                node((px + 0.0) + 0.0, [dx, wy, wz]),
+                node((0.0 + py) + 0.0, [wx, dy, wz]),
+                node((0.0 + 0.0) + pz, [wx, wy, dz]),
+            ])
+        })
+    }
+
     /// One node of primal 0 whose operands are the block's entries with the weights as partials.
     fn block_terms(first: u32, terms: &[(usize, f32)]) -> Self {
         if terms.is_empty() {
@@ -658,6 +700,79 @@ mod tests {
                 (r - f).abs() <= 1e-5 * f.abs().max(1.0),
                 "weight {k}: {r} vs {f}"
             );
+        }
+    }
+
+    /// A lookup at a point seeded in space only (constant weights, each axis's derivative along its own
+    /// axis) takes the one-pass path: four nodes, the primals bit for bit those of the generic sums
+    /// (each a sum with one axis's weights replaced by their derivatives, plus two zero parts), and
+    /// each value's share of each sum its weight product.
+    #[test]
+    fn a_spatially_seeded_lookup_is_four_nodes_with_the_generic_sums() {
+        use crate::scalar::Grad;
+        let (values, dims) = lattice();
+        let fixed = LatticeTaps {
+            index: [[1, 2, 3, 4], [0, 1, 2, 3], [1, 2, 3, 5]],
+            weight: [
+                [0.1, 0.5, 0.3, 0.1],
+                [0.2, 0.4, 0.3, 0.1],
+                [0.25, 0.25, 0.4, 0.1],
+            ],
+        };
+        let deriv = [
+            [-0.5, -0.7, 0.9, 0.3],
+            [-0.2, 0.6, -0.1, -0.3],
+            [0.45, -1.0, 0.05, 0.5],
+        ];
+        let taps = LatticeTaps {
+            index: fixed.index,
+            weight: std::array::from_fn(|a| {
+                std::array::from_fn(|k| {
+                    let mut g = [Rev::new(0.0); 3];
+                    g[a] = Rev::new(deriv[a][k]);
+                    Grad {
+                        v: Rev::new(fixed.weight[a][k]),
+                        g,
+                    }
+                })
+            }),
+        };
+        let _recording = Recording::start();
+        let r = Grad::<Rev>::lattice_sum(&taps, &values, dims, Some(0));
+        assert_eq!(Recording::len(), 4, "one header per sum, no other node");
+        let replaced = |axis: usize| {
+            let mut t = fixed;
+            t.weight[axis] = deriv[axis];
+            lattice_sum_f32(&t, &values, dims[0], dims[1])
+        };
+        let expected = [
+            lattice_sum_f32(&fixed, &values, dims[0], dims[1]),
+            (replaced(0) + 0.0) + 0.0,
+            (0.0 + replaced(1)) + 0.0,
+            (0.0 + 0.0) + replaced(2),
+        ];
+        let outputs = [r.v, r.g[0], r.g[1], r.g[2]];
+        for (k, (out, e)) in outputs.iter().zip(expected).enumerate() {
+            assert_eq!(out.primal().to_bits(), e.to_bits(), "sum {k}");
+            let mut grad = vec![0.0f32; values.len()];
+            Recording::sweep(*out, |e, d| grad[e as usize] += d);
+            let mut w = fixed.weight;
+            if k > 0 {
+                w[k - 1] = deriv[k - 1];
+            }
+            for (c, &z) in fixed.index[2].iter().enumerate() {
+                for (b, &y) in fixed.index[1].iter().enumerate() {
+                    for (a, &x) in fixed.index[0].iter().enumerate() {
+                        let e = (z * dims[1] + y) * dims[0] + x;
+                        let p = w[2][c] * w[1][b] * w[0][a];
+                        assert!(
+                            (grad[e] - p).abs() <= 1e-6,
+                            "sum {k}, value {e}: {} vs {p}",
+                            grad[e]
+                        );
+                    }
+                }
+            }
         }
     }
 
