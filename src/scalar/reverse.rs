@@ -67,6 +67,27 @@ struct LatticeRecord {
 }
 
 impl LatticeRecord {
+    /// The record of node `node` over the taps `index` of a lattice of `dims` whose first value is
+    /// gradient entry `first`, with the weights `weight`.
+    #[inline(always)]
+    fn new(
+        node: u32,
+        first: u32,
+        dims: [usize; 3],
+        index: [[usize; 4]; 3],
+        weight: [[f32; 4]; 3],
+    ) -> Self {
+        Self {
+            node,
+            adjoint: 0.0,
+            first,
+            nx: dims[0] as u32,
+            ny: dims[1] as u32,
+            index: index.map(|axis| axis.map(|k| k as u32)),
+            weight,
+        }
+    }
+
     /// Whether the two records address the same 64 values.
     #[inline]
     fn same_taps(&self, o: &Self) -> bool {
@@ -525,19 +546,11 @@ impl Scalar for Rev {
         );
         let [wx, wy, wz] = taps.weight;
         let [dx, dy, dz] = *deriv;
-        let index = taps.index.map(|axis| axis.map(|k| k as u32));
         with_tape(|t| {
             let mut node = |v: f32, weight: [[f32; 4]; 3]| {
                 let i = t.node(t.entries.len());
-                t.lattices.push(LatticeRecord {
-                    node: i,
-                    adjoint: 0.0,
-                    first,
-                    nx: nx as u32,
-                    ny: ny as u32,
-                    index,
-                    weight,
-                });
+                t.lattices
+                    .push(LatticeRecord::new(i, first, dims, taps.index, weight));
                 Self { v, i }
             };
             Some([
@@ -625,15 +638,13 @@ impl Scalar for Rev {
                     first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
                     "the block's gradient entries overflow"
                 );
-                t.lattices.push(LatticeRecord {
-                    node: i,
-                    adjoint: 0.0,
+                t.lattices.push(LatticeRecord::new(
+                    i,
                     first,
-                    nx: nx as u32,
-                    ny: ny as u32,
-                    index: taps.index.map(|axis| axis.map(|k| k as u32)),
-                    weight: primal.weight,
-                });
+                    dims,
+                    taps.index,
+                    primal.weight,
+                ));
             }
             Self { v, i }
         })
