@@ -67,16 +67,20 @@ struct LatticeRecord {
 }
 
 impl LatticeRecord {
-    /// The record of node `node` over the taps `index` of a lattice of `dims` whose first value is
-    /// gradient entry `first`, with the weights `weight`.
+    /// The record of node `node` over the taps `index` of a lattice of `dims` (`count` values) whose
+    /// first value is gradient entry `first`, with the weights `weight`.
     #[inline(always)]
     fn new(
         node: u32,
         first: u32,
-        dims: [usize; 3],
+        (dims, count): ([usize; 3], usize),
         index: [[usize; 4]; 3],
         weight: [[f32; 4]; 3],
     ) -> Self {
+        debug_assert!(
+            first as usize + count - 1 <= MAX_GRADIENT_ENTRY as usize,
+            "the block's gradient entries overflow"
+        );
         Self {
             node,
             adjoint: 0.0,
@@ -540,17 +544,14 @@ impl Scalar for Rev {
         let first = block?;
         let [nx, ny, _] = dims;
         let [v, px, py, pz] = lattice_sums_with_derivatives_f32(taps, deriv, values, nx, ny)?;
-        debug_assert!(
-            first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
-            "the block's gradient entries overflow"
-        );
         let [wx, wy, wz] = taps.weight;
         let [dx, dy, dz] = *deriv;
+        let lattice = (dims, values.len());
         with_tape(|t| {
             let mut node = |v: f32, weight: [[f32; 4]; 3]| {
                 let i = t.node(t.entries.len());
                 t.lattices
-                    .push(LatticeRecord::new(i, first, dims, taps.index, weight));
+                    .push(LatticeRecord::new(i, first, lattice, taps.index, weight));
                 Self { v, i }
             };
             Some([
@@ -634,14 +635,10 @@ impl Scalar for Rev {
             }
             let i = t.node(start);
             if let Some(first) = block {
-                debug_assert!(
-                    first as usize + values.len() - 1 <= MAX_GRADIENT_ENTRY as usize,
-                    "the block's gradient entries overflow"
-                );
                 t.lattices.push(LatticeRecord::new(
                     i,
                     first,
-                    dims,
+                    (dims, values.len()),
                     taps.index,
                     primal.weight,
                 ));
