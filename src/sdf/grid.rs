@@ -106,15 +106,24 @@ where
     ]
 }
 
-/// The derivatives in `t` of [`cubic_basis`], given `s = 1 − t`.
+/// The derivatives in `t` of [`cubic_basis`], given `s = 1 − t`; like it, one formula for `f32` and
+/// for the three axes side by side in a vector.
 #[inline(always)]
-pub(super) fn cubic_basis_slope(t: f32, s: f32) -> [f32; 4] {
+pub(super) fn cubic_basis_slope<T>(t: T, s: T) -> [T; 4]
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<Output = T>
+        + std::ops::Add<f32, Output = T>
+        + std::ops::Mul<f32, Output = T>,
+{
     let t2 = t * t;
     [
-        -0.5 * s * s,
-        1.5 * t2 - 2.0 * t,
-        -1.5 * t2 + t + 0.5,
-        0.5 * t2,
+        s * -0.5 * s,
+        t2 * 1.5 - t * 2.0,
+        t2 * -1.5 + t + 0.5,
+        t2 * 0.5,
     ]
 }
 
@@ -167,27 +176,47 @@ where
     }
 }
 
+/// The cells of the three axes at a point of a grid's box, with the axes side by side in the lanes of
+/// a vector (the fourth lane unused): the same operations, lane by lane, as [`axis_taps`] in `f32`.
+pub(super) struct LaneCells {
+    /// Each axis's cell: the index of its first lattice point.
+    pub cell: [usize; 3],
+    /// The position within the cell, in `[0, 1]` per axis.
+    pub t: glam::Vec4,
+    /// Lattice points per unit length along each axis.
+    pub inv_h: glam::Vec4,
+}
+
+impl LaneCells {
+    /// At `q` in the box `[lo, lo + ext]` of a lattice of `dims` (each at least 4) points.
+    #[inline(always)]
+    pub fn at(dims: [usize; 3], lo: glam::Vec3, ext: glam::Vec3, q: glam::Vec3) -> Self {
+        let [nx, ny, nz] = dims;
+        let inv_h = glam::Vec4::new(
+            inv_spacing(nx, ext.x),
+            inv_spacing(ny, ext.y),
+            inv_spacing(nz, ext.z),
+            0.0,
+        );
+        let u = (glam::Vec4::from((q, 0.0)) - glam::Vec4::from((lo, 0.0))) * inv_h;
+        // As `axis_taps`: truncation (saturating NaN and negatives to 0), then the last cell.
+        let cell = [
+            (u.x as usize).min(nx - 2),
+            (u.y as usize).min(ny - 2),
+            (u.z as usize).min(nz - 2),
+        ];
+        let t = u - glam::Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+        Self { cell, t, inv_h }
+    }
+}
+
 /// [`spline`] in `f32` (no derivative), bit for bit: the three axes' lattice coordinates and basis
 /// weights side by side in the lanes of one vector (the same operations, lane by lane), then the
 /// vectorised lattice sum. The tracer's evaluation.
 #[inline(always)]
 fn spline_f32(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, q: glam::Vec3) -> f32 {
-    let [nx, ny, nz] = data.dims;
-    let ext = bmax - bmin;
-    let inv_h = glam::Vec4::new(
-        inv_spacing(nx, ext.x),
-        inv_spacing(ny, ext.y),
-        inv_spacing(nz, ext.z),
-        0.0,
-    );
-    let u = (glam::Vec4::from((q, 0.0)) - glam::Vec4::from((bmin, 0.0))) * inv_h;
-    // As `axis_taps`: truncation (saturating NaN and negatives to 0), then the last cell.
-    let cell = [
-        (u.x as usize).min(nx - 2),
-        (u.y as usize).min(ny - 2),
-        (u.z as usize).min(nz - 2),
-    ];
-    let t = u - glam::Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+    let [nx, ny, _] = data.dims;
+    let LaneCells { cell, t, .. } = LaneCells::at(data.dims, bmin, bmax - bmin, q);
     let b = cubic_basis(t, glam::Vec4::ONE - t);
     let axis = |a: usize| fold_ghosts(cell[a], data.dims[a], b.map(|v| v[a]), 0.0);
     let ((ix, wx), (iy, wy), (iz, wz)) = (axis(0), axis(1), axis(2));

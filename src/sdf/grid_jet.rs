@@ -12,7 +12,7 @@
 //! back to AD there.
 
 use super::GridData;
-use super::grid::{cubic_basis, cubic_basis_slope, fold_ghosts, inv_spacing};
+use super::grid::{LaneCells, cubic_basis, cubic_basis_slope, fold_ghosts};
 use glam::Vec4;
 
 /// The weights of one axis's four taps for the value and its first and second derivatives along the
@@ -24,23 +24,25 @@ struct AxisJet {
     dd: [f32; 4],
 }
 
-/// The taps along one axis of a lattice of `n ≥ 4` points spanning `[lo, lo + ext]`, at coordinate `x`
-/// in that range. The value weights are [`super::grid`]'s, bit for bit.
+/// The taps along the three axes of a lattice of `dims` (each at least 4) points spanning `[lo, lo +
+/// ext]`, at `p` in that box, computed for the three axes at once in the lanes of a vector as
+/// [`super::grid`]'s `f32` spline does, so the value weights are its weights bit for bit.
 #[inline(always)]
-fn axis_jet(x: f32, lo: f32, ext: f32, n: usize) -> AxisJet {
-    let inv_h = inv_spacing(n, ext);
-    let u = (x - lo) * inv_h;
-    let i = (u as usize).min(n - 2);
-    let t = u - i as f32;
-    let s = 1.0 - t;
+fn axes_jet(p: glam::Vec3, lo: glam::Vec3, ext: glam::Vec3, dims: [usize; 3]) -> [AxisJet; 3] {
+    let LaneCells { cell, t, inv_h } = LaneCells::at(dims, lo, ext, p);
+    let s = Vec4::ONE - t;
     // The grid's basis, and its derivatives in t.
     let w = cubic_basis(t, s);
     let d = cubic_basis_slope(t, s).map(|v| v * inv_h);
-    let dd = [s, 3.0 * t - 2.0, 1.0 - 3.0 * t, t].map(|v| v * (inv_h * inv_h));
-    let (index, w) = fold_ghosts(i, n, w, 0.0);
-    let (_, d) = fold_ghosts(i, n, d, 0.0);
-    let (_, dd) = fold_ghosts(i, n, dd, 0.0);
-    AxisJet { index, w, d, dd }
+    let dd = [s, t * 3.0 - 2.0, Vec4::ONE - t * 3.0, t].map(|v| v * (inv_h * inv_h));
+    let axis = |a: usize| {
+        let n = dims[a];
+        let (index, w) = fold_ghosts(cell[a], n, w.map(|v| v[a]), 0.0);
+        let (_, d) = fold_ghosts(cell[a], n, d.map(|v| v[a]), 0.0);
+        let (_, dd) = fold_ghosts(cell[a], n, dd.map(|v| v[a]), 0.0);
+        AxisJet { index, w, d, dd }
+    };
+    [axis(0), axis(1), axis(2)]
 }
 
 #[inline(always)]
@@ -61,11 +63,8 @@ pub(super) fn jet<const SECOND: bool>(
     if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
         return None;
     }
-    let ext = bmax - bmin;
     let [nx, ny, _] = data.dims;
-    let x = axis_jet(p.x, bmin.x, ext.x, nx);
-    let y = axis_jet(p.y, bmin.y, ext.y, ny);
-    let z = axis_jet(p.z, bmin.z, ext.z, data.dims[2]);
+    let [x, y, z] = axes_jet(p, bmin, bmax - bmin, data.dims);
     let values = &data.values;
     // Each row's four x taps ride as one vector through the sums over y and z, weighted by (y order, z
     // order), and meet the x weights of each order last, the spline's own summation order
