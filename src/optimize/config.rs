@@ -36,7 +36,7 @@ pub const DEFAULT_LEARNING_RATE_RESOLUTION: ResolutionPower = ResolutionPower::F
 /// absent.
 pub const DEFAULT_LEARNING_RATE_WARMUP: u32 = 5;
 /// The moving average's weight on the past when `ema` is absent.
-pub const DEFAULT_EMA: f32 = 0.0;
+pub const DEFAULT_EMA: f32 = 0.9;
 /// The per-entry gradient clamp (in running RMS of the entry) when `gradient_clamp` is absent.
 pub const DEFAULT_GRADIENT_CLAMP: Option<f64> = None;
 /// Levels of the loss's image pyramid when `loss_scales` is absent.
