@@ -313,9 +313,11 @@ fn objects(emitter: &str, integrator: &str, size: u32) -> String {
     )
 }
 
-/// A one-colour map samples exactly as the `constant` emitter (uniformly over the sphere, from the
-/// same random numbers) and returns the same radiance (a bilinear blend of equal texels, exact to
-/// rounding), so the images agree to rounding: `direct` and `path`.
+/// A one-colour map gives the image of the `constant` emitter of its colour, in expectation: the map
+/// is light-sampled (uniformly over the sphere, at one luminance) and weighted against the BSDF's
+/// samples, the constant emitter left to the BSDF's samples alone (a different estimator of the same
+/// integral). `direct` and `path`, 256 spp: the whole images' sums within 1%, and the images, blurred
+/// over 3×3 pixels, within 3% (relative L2; the map's estimator is the noisier).
 #[test]
 fn one_colour_map_is_the_constant_emitter() {
     let dir = workdir("envmap", "constant");
@@ -333,13 +335,15 @@ fn one_colour_map_is_the_constant_emitter() {
         let map = parse(
             r#"{"name": "sky", "type": "envmap", "file": "flat.exr", "rotate": {"axis": [1, 0, 0], "angle": 40}}"#,
         );
-        let a = render(&constant, &options(8, 5)).0;
-        let b = render(&map, &options(8, 5)).0;
-        let worst = (a.rgb.iter().zip(&b.rgb))
-            .map(|(x, y)| (x - y).abs() / x.abs().max(1e-3))
-            .fold(0.0f32, f32::max);
-        println!("{integrator}: worst relative difference {worst:e}");
-        assert!(worst < 1e-4, "{integrator}: {worst}");
+        let a = gray(&render(&constant, &options(256, 5)).0);
+        let b = gray(&render(&map, &options(256, 6)).0);
+        let sums = (a.iter().sum::<f64>() - b.iter().sum::<f64>()).abs() / a.iter().sum::<f64>();
+        let images = rel_l2(&blur(&b, 24, 24, 1), &blur(&a, 24, 24, 1), None);
+        println!("{integrator}: sums differ by {sums:.2e}, blurred images by {images:.2e}");
+        assert!(
+            sums < 0.01 && images < 0.03,
+            "{integrator}: {sums}, {images}"
+        );
     }
 }
 

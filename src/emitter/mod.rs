@@ -656,6 +656,19 @@ impl Emitter {
     pub fn is_infinite(&self) -> bool {
         matches!(self, Emitter::Constant { .. } | Emitter::Envmap { .. })
     }
+
+    /// Whether next-event estimation samples this emitter: every emitter but the constant
+    /// environment. A uniform light sample knows nothing the BSDF's does not (against radiance that
+    /// is the same from every direction, a diffuse surface's cosine sample is exactly proportional
+    /// to the unoccluded integrand), so BSDF-sampled rays alone estimate it, with MIS weight 1, and
+    /// the light samples and shadow rays spent on it are saved, as pbrt-v4's uniform infinite light
+    /// does with its incomplete densities (Pharr, Jakob and Humphreys, *Physically Based Rendering*,
+    /// 4th ed., §12.5.1). Every BSDF here samples every direction it reflects into, so nothing is
+    /// missed. An environment map is always light-sampled, even one of one luminance: its estimator
+    /// must not change while its texels are optimised.
+    pub fn is_light_sampled(&self) -> bool {
+        !matches!(self, Emitter::Constant { .. })
+    }
 }
 
 /// An environment map's rotation (map to world; `inverse`: world to map) in the generic scalar, the

@@ -12,6 +12,8 @@
 //! `L += β_i · w_light · f(x_i) G(x_i, y) L_e(y) / p_A(y)` for the light sample and, for the BSDF-sampled
 //! next vertex, `β_{i+1} = β_i f(x_i) G(x_i, x_{i+1}) / p_A(x_{i+1})` with `L += β_{i+1} w_bsdf L_e(x_{i+1})`
 //! when it is on an emitter (or at infinity, with `|cos|` and a solid-angle density instead of `G`).
+//! The light sample chooses among the emitters other than a constant environment, which the
+//! BSDF-sampled rays alone estimate, with weight 1 ([`crate::emitter::Emitter::is_light_sampled`]).
 
 use super::shading::{abs_cos, direction, geometry_term};
 use crate::math::sampling::power_heuristic;
@@ -165,13 +167,18 @@ pub fn light_pdf(
     p: glam::Vec3,
     n: glam::Vec3,
 ) -> f32 {
-    let select = 1.0 / scene.emitters.len() as f32;
-    select * scene.emitters[emitter].emitter.pdf_li(reference, wi, p, n)
+    let e = &scene.emitters[emitter].emitter;
+    if !e.is_light_sampled() {
+        return 0.0;
+    }
+    let select = 1.0 / scene.light_sampled.len() as f32;
+    select * e.pdf_li(reference, wi, p, n)
 }
 
 /// One next-event sample from the scattering point `p` (normal `n`, outgoing `wo`, shape `shape`):
-/// picks an emitter uniformly with `u_pick`, samples it with `u`, tests visibility. `None` when the
-/// sample carries no light (no emitter, back side, zero BSDF, occluded). `from` is stored in the result.
+/// picks an emitter uniformly among [`Scene::light_sampled`] with `u_pick`, samples it with `u`,
+/// tests visibility. `None` when the sample carries no light (no such emitter, back side, zero BSDF,
+/// occluded). `from` is stored in the result.
 #[allow(clippy::too_many_arguments)]
 pub fn sample_light(
     scene: &Scene,
@@ -184,11 +191,11 @@ pub fn sample_light(
     u: glam::Vec2,
     counters: &mut TraceCounters,
 ) -> Option<LightVertex> {
-    let count = scene.emitters.len();
+    let count = scene.light_sampled.len();
     if count == 0 {
         return None;
     }
-    let k = ((u_pick * count as f32) as usize).min(count - 1);
+    let k = scene.light_sampled[((u_pick * count as f32) as usize).min(count - 1)];
     let emitter = &scene.emitters[k].emitter;
     if emitter.is_delta() {
         return sample_delta_light(scene, from, shape, k, p, n, wo, counters);
@@ -237,10 +244,11 @@ pub fn sample_light(
     })
 }
 
-/// The next-event "sample" of delta light `k` (chosen with probability `1/count`) from the scattering
-/// point `p` (normal `n`, outgoing `wo`, shape `shape`): the one direction towards it, tested for
-/// visibility; density `1/count` standing for the delta, MIS weight 1 (no BSDF-sampled ray reaches a
-/// delta light, [`crate::emitter::delta`]).
+/// The next-event "sample" of delta light `k` (chosen with probability `1/count`, `count` the
+/// emitters next-event estimation chooses among) from the scattering point `p` (normal `n`, outgoing
+/// `wo`, shape `shape`): the one direction towards it, tested for visibility; density `1/count`
+/// standing for the delta, MIS weight 1 (no BSDF-sampled ray reaches a delta light,
+/// [`crate::emitter::delta`]).
 #[allow(clippy::too_many_arguments)]
 fn sample_delta_light(
     scene: &Scene,
@@ -279,7 +287,7 @@ fn sample_delta_light(
         emitter: k,
         p: es.p,
         n: es.n,
-        pdf: 1.0 / scene.emitters.len() as f32,
+        pdf: 1.0 / scene.light_sampled.len() as f32,
         mis: 1.0,
     })
 }

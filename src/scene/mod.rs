@@ -290,6 +290,9 @@ pub struct Scene {
     pub finite_emitters: Vec<usize>,
     /// Index of the environment emitter, if any (at most one).
     pub environment: Option<usize>,
+    /// Indices of the emitters next-event estimation chooses among, uniformly
+    /// ([`crate::emitter::Emitter::is_light_sampled`]).
+    pub light_sampled: Vec<usize>,
     /// The hierarchy over the shapes' bounds that ray queries use, built by [`Scene::new`]: after
     /// changing [`Scene::shapes`] in place (their number or bounds), call [`Scene::refresh_bvh`].
     pub bvh: Arc<Bvh>,
@@ -339,6 +342,9 @@ impl Scene {
             .filter(|&i| !emitters[i].emitter.is_infinite() && !emitters[i].emitter.is_delta())
             .collect();
         let environment = (0..emitters.len()).find(|&i| emitters[i].emitter.is_infinite());
+        let light_sampled: Vec<usize> = (0..emitters.len())
+            .filter(|&i| emitters[i].emitter.is_light_sampled())
+            .collect();
         let trace = TraceSettings {
             eps: base_eps(&shapes, &camera),
             ..TraceSettings::default()
@@ -355,6 +361,7 @@ impl Scene {
             trace,
             finite_emitters,
             environment,
+            light_sampled,
             bvh,
             use_bvh: true,
         }
