@@ -7,7 +7,8 @@ use implicit_psdr::camera::Camera;
 use implicit_psdr::emitter::Emitter;
 use implicit_psdr::film::Filter;
 use implicit_psdr::integrator::path::{
-    PathRecord, PathVertex, TraceCounters, VertexKind, contribution, detached, sample_light,
+    LightStrategy, PathRecord, PathVertex, TraceCounters, VertexKind, contribution, detached,
+    sample_light,
 };
 use implicit_psdr::integrator::{IntegratorKind, RenderOptions, render};
 use implicit_psdr::math::Ray;
@@ -259,13 +260,15 @@ fn nee_estimate(scene: &Scene, p: G3, n: G3, camera: G3, m: usize) -> f64 {
             mis: 0.0,
         }],
         lights: vec![],
+        strategy: LightStrategy::Derivative,
     };
     let mut sum = 0.0f64;
     for i in 0..m {
         for j in 0..m {
             let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
             record.lights.clear();
-            if let Some(lv) = sample_light(scene, 0, 0, p, n, wo, 0.5, u, &mut counters) {
+            let strategy = LightStrategy::Derivative;
+            if let Some(lv) = sample_light(scene, strategy, 0, 0, p, n, wo, 0.5, u, &mut counters) {
                 record
                     .lights
                     .push(implicit_psdr::integrator::path::LightVertex { mis: 1.0, ..lv });
@@ -302,11 +305,10 @@ fn sphere_light_irradiance_matches_closed_form() {
     );
 }
 
-/// An unoccluded point in a constant environment `L` receives `E = π L`, by the emitter's own
-/// direction sampling (uniform over the sphere; the crease-shadow estimator's mixture draws from it).
-/// Next-event estimation leaves this emitter to the BSDF's samples: `sample_light` gives nothing for
-/// it, and `tests/light_sampling.rs` checks the BSDF-sampled estimate, `ρ L` on every pixel of a
-/// convex diffuse shape, to rounding.
+/// An unoccluded point in a constant environment `L` receives `E = π L`, by the light samples of the
+/// derivative passes (which keep the sky light-sampled); the image passes leave the sky to the BSDF's
+/// samples, and their light sample gives nothing for it (`tests/light_sampling.rs` checks their
+/// estimate, `ρ L` on every pixel of a convex diffuse shape, to rounding).
 #[test]
 fn environment_irradiance_is_pi_l() {
     let (l, rho) = (2.0f32, 0.4f32);
@@ -317,25 +319,17 @@ fn environment_irradiance_is_pi_l() {
         rho,
     );
     let n = G3::new(0.3, 0.9, -0.2).normalize();
-    let (p, wo) = (G3::ZERO, (n * 2.0 + G3::X).normalize());
-    let emitter = &scene.emitters[0].emitter;
-    let m = 400;
-    let mut sum = 0.0f64;
-    let mut counters = TraceCounters::default();
-    for i in 0..m {
-        for j in 0..m {
-            let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-            assert!(sample_light(&scene, 0, 0, p, n, wo, 0.5, u, &mut counters).is_none());
-            let es = emitter.sample_li(p, u).expect("a direction");
-            sum += (l * n.dot(es.wi).max(0.0) / es.pdf) as f64;
-        }
-    }
-    let estimate = rho as f64 / PI * sum / (m * m) as f64;
+    let camera = n * 2.0 + G3::X;
+    let estimate = nee_estimate(&scene, G3::ZERO, n, camera, 400);
     let exact = (rho * l) as f64;
     assert!(
         (estimate - exact).abs() < 5e-3 * exact,
         "{estimate} vs {exact}"
     );
+    let (u, wo) = (Vec2::new(0.3, 0.7), camera.normalize());
+    let mut counters = TraceCounters::default();
+    let image = LightStrategy::Image;
+    assert!(sample_light(&scene, image, 0, 0, G3::ZERO, n, wo, 0.5, u, &mut counters).is_none());
 }
 
 /// The floor slab whose top face is the plane `y = top`: a box as in the default scene, or the

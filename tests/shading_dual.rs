@@ -481,6 +481,7 @@ fn path_contribution_dual_matches_central_difference() {
             pdf: 1.7,
             mis: 0.8,
         }],
+        ..PathRecord::default()
     };
     let plain = scene_with(Param3::new(l), Param3::new(rho));
     let value = contribution::<f32>(&plain, &record, detached);

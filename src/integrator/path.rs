@@ -12,8 +12,10 @@
 //! `L += β_i · w_light · f(x_i) G(x_i, y) L_e(y) / p_A(y)` for the light sample and, for the BSDF-sampled
 //! next vertex, `β_{i+1} = β_i f(x_i) G(x_i, x_{i+1}) / p_A(x_{i+1})` with `L += β_{i+1} w_bsdf L_e(x_{i+1})`
 //! when it is on an emitter (or at infinity, with `|cos|` and a solid-angle density instead of `G`).
-//! The light sample chooses among the emitters other than a constant environment, which the
-//! BSDF-sampled rays alone estimate, with weight 1 ([`crate::emitter::Emitter::is_light_sampled`]).
+//! In image passes the light sample chooses among the emitters other than a constant environment,
+//! which the BSDF-sampled rays alone estimate, with weight 1
+//! ([`crate::emitter::Emitter::is_light_sampled`]); passes that differentiate the contribution keep
+//! the sky light-sampled ([`LightStrategy`]).
 
 use super::shading::{abs_cos, direction, geometry_term};
 use crate::math::sampling::power_heuristic;
@@ -67,6 +69,40 @@ pub struct LightVertex {
     pub mis: f32,
 }
 
+/// Which emitters a path's light samples choose among.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum LightStrategy {
+    /// The emitters [`crate::emitter::Emitter::is_light_sampled`] names: a constant sky is left to
+    /// the BSDF's samples, with weight 1 (the least noisy image).
+    #[default]
+    Image,
+    /// Every emitter, the constant sky too, with MIS. For passes that differentiate the contribution
+    /// at scattering vertices: the derivative of `|n·ω|` through the normal over the cosine density
+    /// alone, `(ω·∂n) / |n·ω|`, has an infinite second moment at grazing directions (logarithmically);
+    /// the MIS weight against the uniform light sample bounds it.
+    Derivative,
+}
+
+impl LightStrategy {
+    /// How many emitters the light sample chooses among.
+    #[inline]
+    fn count(self, scene: &Scene) -> usize {
+        match self {
+            LightStrategy::Image => scene.light_sampled.len(),
+            LightStrategy::Derivative => scene.emitters.len(),
+        }
+    }
+
+    /// The `i`-th of them, as an index of [`Scene::emitters`].
+    #[inline]
+    fn pick(self, scene: &Scene, i: usize) -> usize {
+        match self {
+            LightStrategy::Image => scene.light_sampled[i],
+            LightStrategy::Derivative => i,
+        }
+    }
+}
+
 /// One camera sample's path.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PathRecord {
@@ -76,6 +112,8 @@ pub struct PathRecord {
     pub vertices: Vec<PathVertex>,
     /// Next-event samples, in the order of their `from` vertex.
     pub lights: Vec<LightVertex>,
+    /// Which emitters the light samples choose among: set by the pass, kept by every trace.
+    pub strategy: LightStrategy,
 }
 
 /// Counters kept while tracing.
@@ -161,6 +199,7 @@ fn emission_along(
 #[inline]
 pub fn light_pdf(
     scene: &Scene,
+    strategy: LightStrategy,
     emitter: usize,
     reference: glam::Vec3,
     wi: glam::Vec3,
@@ -168,20 +207,21 @@ pub fn light_pdf(
     n: glam::Vec3,
 ) -> f32 {
     let e = &scene.emitters[emitter].emitter;
-    if !e.is_light_sampled() {
+    if strategy == LightStrategy::Image && !e.is_light_sampled() {
         return 0.0;
     }
-    let select = 1.0 / scene.light_sampled.len() as f32;
+    let select = 1.0 / strategy.count(scene) as f32;
     select * e.pdf_li(reference, wi, p, n)
 }
 
 /// One next-event sample from the scattering point `p` (normal `n`, outgoing `wo`, shape `shape`):
-/// picks an emitter uniformly among [`Scene::light_sampled`] with `u_pick`, samples it with `u`,
+/// picks an emitter uniformly among those of `strategy` with `u_pick`, samples it with `u`,
 /// tests visibility. `None` when the sample carries no light (no such emitter, back side, zero BSDF,
 /// occluded). `from` is stored in the result.
 #[allow(clippy::too_many_arguments)]
 pub fn sample_light(
     scene: &Scene,
+    strategy: LightStrategy,
     from: usize,
     shape: usize,
     p: glam::Vec3,
@@ -191,14 +231,14 @@ pub fn sample_light(
     u: glam::Vec2,
     counters: &mut TraceCounters,
 ) -> Option<LightVertex> {
-    let count = scene.light_sampled.len();
+    let count = strategy.count(scene);
     if count == 0 {
         return None;
     }
-    let k = scene.light_sampled[((u_pick * count as f32) as usize).min(count - 1)];
+    let k = strategy.pick(scene, ((u_pick * count as f32) as usize).min(count - 1));
     let emitter = &scene.emitters[k].emitter;
     if emitter.is_delta() {
-        return sample_delta_light(scene, from, shape, k, p, n, wo, counters);
+        return sample_delta_light(scene, count, from, shape, k, p, n, wo, counters);
     }
     let es = emitter.sample_li(p, u)?;
     let surface = &scene.shapes[shape];
@@ -245,13 +285,14 @@ pub fn sample_light(
 }
 
 /// The next-event "sample" of delta light `k` (chosen with probability `1/count`, `count` the
-/// emitters next-event estimation chooses among) from the scattering point `p` (normal `n`, outgoing
+/// emitters the light sample chooses among) from the scattering point `p` (normal `n`, outgoing
 /// `wo`, shape `shape`): the one direction towards it, tested for visibility; density `1/count`
 /// standing for the delta, MIS weight 1 (no BSDF-sampled ray reaches a delta light,
 /// [`crate::emitter::delta`]).
 #[allow(clippy::too_many_arguments)]
 fn sample_delta_light(
     scene: &Scene,
+    count: usize,
     from: usize,
     shape: usize,
     k: usize,
@@ -287,7 +328,7 @@ fn sample_delta_light(
         emitter: k,
         p: es.p,
         n: es.n,
-        pdf: 1.0 / scene.light_sampled.len() as f32,
+        pdf: 1.0 / count as f32,
         mis: 1.0,
     })
 }
@@ -358,7 +399,15 @@ pub(crate) fn trace_path_after(
                 let (pdf, mis) = match bsdf_pdf {
                     None => (1.0, 1.0),
                     Some(pb) => {
-                        let pl = light_pdf(scene, env, prev, ray.d, prev + ray.d, -ray.d);
+                        let pl = light_pdf(
+                            scene,
+                            record.strategy,
+                            env,
+                            prev,
+                            ray.d,
+                            prev + ray.d,
+                            -ray.d,
+                        );
                         (pb, power_heuristic(pb, pl))
                     }
                 };
@@ -383,7 +432,10 @@ pub(crate) fn trace_path_after(
             Surface::Emitter(i) => {
                 let mis = match bsdf_pdf {
                     None => 1.0,
-                    Some(pb) => power_heuristic(pb, light_pdf(scene, i, prev, ray.d, h.p, h.n)),
+                    Some(pb) => {
+                        let pl = light_pdf(scene, record.strategy, i, prev, ray.d, h.p, h.n);
+                        power_heuristic(pb, pl)
+                    }
                 };
                 record.vertices.push(PathVertex {
                     p: h.p,
@@ -411,9 +463,18 @@ pub(crate) fn trace_path_after(
                 let u_pick = sampler.next_1d();
                 let u_light = sampler.next_2d();
                 let u_bsdf = sampler.next_2d();
-                if let Some(lv) =
-                    sample_light(scene, index, s, h.p, h.n, wo, u_pick, u_light, counters)
-                {
+                if let Some(lv) = sample_light(
+                    scene,
+                    record.strategy,
+                    index,
+                    s,
+                    h.p,
+                    h.n,
+                    wo,
+                    u_pick,
+                    u_light,
+                    counters,
+                ) {
                     record.lights.push(lv);
                 }
                 let Some(bs) = scene.shapes[s].bsdf_sample(h.p, h.n, wo, u_bsdf) else {

@@ -36,7 +36,9 @@ use crate::film::{Film, Filter, Image, PixelFilm, SampleSink};
 use crate::integrator::attach::{SceneAttach, for_each_window};
 use crate::integrator::driver::{self, RenderStats};
 use crate::integrator::options::{DiffOptions, require_continuous_filter};
-use crate::integrator::path::{Attached, PathRecord, TraceCounters, contribution_parts};
+use crate::integrator::path::{
+    Attached, LightStrategy, PathRecord, TraceCounters, contribution_parts,
+};
 use crate::integrator::primal::trace_sample;
 use crate::math::Vec3;
 use crate::scalar::{Directions, Scalar, finite_directions};
@@ -104,7 +106,10 @@ where
             let y = y as u32;
             // Per item, not per pass: a reverse-mode tape holds the values of its own thread only.
             let frame = scene.camera.frame::<S>();
-            let mut record = PathRecord::default();
+            let mut record = PathRecord {
+                strategy: LightStrategy::Derivative,
+                ..PathRecord::default()
+            };
             let mut counters = TraceCounters::default();
             for x in 0..w {
                 let pixel = (y * w + x) as usize;
