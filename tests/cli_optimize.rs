@@ -364,8 +364,9 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
     let row = &progress(&dir.join("shape/progress.csv"))[0];
     // The 8³ grid samples a sphere of radius 0.55, which its spline shrinks by about h²/(3r) to
     // about 0.50 (h = 2/7); against the target's 0.6 that is an IoU near (0.5/0.6)³ = 0.58 and a
-    // Chamfer distance near 0.1 (measured after one step: 0.575).
-    assert!(row[4] > 0.45 && row[4] < 0.7, "IoU {}", row[4]);
+    // Chamfer distance near 0.1. The first step moves each value by at most the grid's rate, 0.04:
+    // a radius of at most 0.54, an IoU of at most (0.54/0.6)³ = 0.73 (measured: 0.68).
+    assert!(row[4] > 0.45 && row[4] < 0.75, "IoU {}", row[4]);
     assert!(row[5] > 0.05 && row[5] < 0.15, "Chamfer {}", row[5]);
     // loss.png gains the IoU panel below the loss.
     assert_eq!(png_size(&dir.join("shape/loss.png")), (640, 600));
@@ -393,15 +394,15 @@ fn grid_run_writes_the_refined_grid_and_a_result_whose_paths_resolve() {
     );
     let rows = progress(&dir.join("mesh/progress.csv"));
     assert_eq!(rows.len(), 2);
-    // As above: a sphere of radius about 0.5 against 0.6: Chamfer about 0.1 of the reference's
-    // diagonal 1.2 √3 (0.05), normals alike, IoU near 0.58.
+    // As above: a sphere of radius 0.50–0.54 against 0.6: Chamfer about 0.1 of the reference's
+    // diagonal 1.2 √3 (0.05), normals alike, IoU from 0.58 to 0.73 (measured: 0.70).
     let (chamfer, normals, iou) = (rows[0][4], rows[0][5], rows[0][6]);
     assert!(chamfer > 0.025 && chamfer < 0.075, "Chamfer {chamfer}");
     assert!(
         normals > 0.95 && normals <= 1.0,
         "normal consistency {normals}"
     );
-    assert!(iou > 0.45 && iou < 0.7, "IoU {iou}");
+    assert!(iou > 0.45 && iou < 0.75, "IoU {iou}");
     for ply in ["mesh/blob.ply", "mesh/snapshots/blob_00001.ply"] {
         let mesh = implicit_psdr::io::read_mesh(&dir.join(ply)).unwrap();
         assert!(

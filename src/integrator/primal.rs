@@ -3,7 +3,7 @@
 
 use super::driver::{self, RenderStats};
 use super::options::RenderOptions;
-use super::path::{PathRecord, TraceCounters, contribution, detached, trace_path};
+use super::path::{LightStrategy, PathRecord, TraceCounters, contribution, detached, trace_path};
 use crate::camera::CameraFrame;
 use crate::film::{Image, PixelFilm, SampleSink};
 use crate::math::Vec3;
@@ -68,6 +68,16 @@ pub fn sample_pixel(
 /// Rows are rendered in parallel ([`driver::run`]); each pixel sums its own samples in a fixed order,
 /// so the image is identical bit for bit whatever the number of threads.
 pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
+    render_with(scene, options, LightStrategy::Image)
+}
+
+/// [`render`] with the light samples of `strategy`: [`LightStrategy::Derivative`] gives, bit for bit,
+/// the image of the interior derivative pass with the same options (reverse mode's pixel values).
+pub(crate) fn render_with(
+    scene: &Scene,
+    options: &RenderOptions,
+    strategy: LightStrategy,
+) -> (Image, RenderStats) {
     let start = std::time::Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let spp = options.spp.max(1);
@@ -80,7 +90,10 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Image, RenderStats) {
         &options.progress,
         |y, tile, stats| {
             let y = y as u32;
-            let mut record = PathRecord::default();
+            let mut record = PathRecord {
+                strategy,
+                ..PathRecord::default()
+            };
             let mut counters = TraceCounters::default();
             for x in 0..width {
                 let pixel = (y * width + x) as usize;

@@ -14,9 +14,10 @@
 //!
 //! **The pixel value in `∂F − I ∂W`.** The differentiable normalisation subtracts `I_j ∂W_j`, a control
 //! variate whose expectation is zero for any constant `I_j` (`E[∂W_j] = 0` with `W`'s primary term).
-//! [`render_gradient`] uses the image of its own samples, as forward mode does, so that the two agree to
-//! rounding; [`loss_gradient`] uses the loss pass's image, independent of the adjoint pass's samples,
-//! which saves rendering the adjoint pass's image and keeps the gradient unbiased.
+//! [`render_gradient`] uses the image of its own samples (rendered with its interior pass's light
+//! strategy, not the image passes'), as forward mode does, so that the two agree to rounding;
+//! [`loss_gradient`] uses the loss pass's image, independent of the adjoint pass's samples, which saves
+//! rendering the adjoint pass's image and keeps the gradient unbiased.
 
 pub mod loss;
 
@@ -31,7 +32,8 @@ use crate::integrator::boundary::tangent_sampling::TangentSampling;
 use crate::integrator::diff::interior;
 use crate::integrator::driver::RenderStats;
 use crate::integrator::options::{DiffOptions, RenderOptions, require_continuous_filter};
-use crate::integrator::primal::render;
+use crate::integrator::path::LightStrategy;
+use crate::integrator::primal::{render, render_with};
 use crate::scalar::{BlockValues, MAX_GRADIENT_ENTRY, Rev};
 use crate::scene::{GridBlock, Scene, Selection};
 
@@ -153,7 +155,11 @@ pub fn render_gradient(
 ) -> Result<Gradient> {
     let scene = &layout.apply(scene)?;
     let image = match options.normalization {
-        Normalization::Differentiable => Some(render(scene, &options.render)),
+        Normalization::Differentiable => Some(render_with(
+            scene,
+            &options.render,
+            LightStrategy::Derivative,
+        )),
         Normalization::Fixed => None,
     };
     let (image, stats) = image.unwrap_or_else(|| {
