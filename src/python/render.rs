@@ -74,7 +74,8 @@ pub(crate) fn render<'py>(
 }
 
 /// Derivative images in forward mode, as ``implicit-psdr diff`` computes them (same samples as
-/// ``render`` with the same ``spp`` and ``seed``; the interior, primary and secondary terms).
+/// ``render`` with the same ``spp`` and ``seed``, its image the same in expectation under a constant
+/// sky; the interior, primary and secondary terms).
 ///
 /// ``params``: parameter names (see ``Scene.params()``); ``grid_directions``: ``{node: U}``, the
 /// derivative along a perturbation ``U`` (shape ``(nz, ny, nx)``) of a grid's values. Returns a dict

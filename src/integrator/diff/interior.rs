@@ -17,7 +17,9 @@
 //!
 //! Directions at infinity (the environment seen directly, or a camera ray that escapes) use the film
 //! area per steradian, `J_ω = f²/cos³θ_c`, in place of `J_film`. The image channel is the mean of each
-//! pixel's own samples, bit for bit as [`crate::integrator::render`].
+//! pixel's own samples, bit for bit as [`crate::integrator::render`] except under a constant sky,
+//! which this pass light-samples ([`crate::integrator::path::LightStrategy::Derivative`]) and the image
+//! leaves to BSDF samples: there the two images agree in expectation.
 //!
 //! **Normalisation** (supplemental §3; docs/theory.md §6). `Fixed`: the estimate above. `Differentiable`: the derivative of `F_j /
 //! W_j`, `F_j` the estimate above (primal: the image) and `W_j = ∫ w_j J_film J₁ dA` (`J₁` the first
