@@ -99,8 +99,8 @@ fn main() {
     );
     println!(
         "  complete ({}+{} boundary samples per pixel) {:8.1} ms  ratio {:.2}",
-        4 * bp,
-        4 * bs,
+        4.0 * bp,
+        4.0 * bs,
         c4 * 1e3,
         c4 / p
     );

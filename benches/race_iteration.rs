@@ -1,6 +1,6 @@
 //! One iteration of the race setup (`scenes/inverse/race/opt.json`: 6 of its 12 views, 128×128,
-//! 16 spp, the default boundary budgets), term by term, against a primal render of the same views at
-//! the same spp, in one run (medians of interleaved repetitions; the machine is shared, so ratios, never
+//! 16 spp, `optimize`'s default boundary budgets), term by term, against a primal render of the same
+//! views at the same spp, in one run (medians of interleaved repetitions; the machine is shared, so ratios, never
 //! one absolute time).
 //!
 //! The optimised grid is the target's shape (the smooth union of `target.json`) baked over the
@@ -99,6 +99,7 @@ fn main() {
                     seed: (rep * 100 + 2 * v) as u64,
                     ..RenderOptions::default()
                 },
+                boundary: opt.settings.boundary,
                 ..DiffOptions::default()
             };
             if primal {

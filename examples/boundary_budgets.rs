@@ -57,8 +57,8 @@ fn main() -> implicit_psdr::Result<()> {
     println!("|---|---|---|---|");
     for (primary, secondary) in BUDGETS {
         let boundary = BoundaryBudget {
-            primary_spp: Some(primary),
-            secondary_spp: Some(secondary),
+            primary_spp: Some(primary as f32),
+            secondary_spp: Some(secondary as f32),
         };
         let (mut variance, mut seconds) = (0.0, 0.0);
         for pair in 0..PAIRS {

@@ -53,8 +53,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             progress: Default::default(),
         },
         boundary: BoundaryBudget {
-            primary_spp: Some(4 * bp),
-            secondary_spp: Some(4 * bs),
+            primary_spp: Some(4.0 * bp),
+            secondary_spp: Some(4.0 * bs),
         },
         ..DiffOptions::default()
     };

@@ -279,7 +279,7 @@ fn diff_adds_the_boundary_terms_of_path_scenes() {
             "--spp-secondary",
             "8",
             "--spp-primary",
-            "4",
+            "0.5",
             "--terms",
         ],
     );
@@ -433,6 +433,28 @@ fn bad_arguments_exit_2_without_output() {
                 "tangent",
             ],
             "--velocity-field",
+        ),
+        (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--spp-secondary",
+                "-0.5",
+            ],
+            "--spp-secondary",
+        ),
+        (
+            &[
+                "diff",
+                "scene.json",
+                "--param",
+                "ball.radius",
+                "--spp-primary",
+                "NaN",
+            ],
+            "--spp-primary",
         ),
         (
             &["fd", "scene.json", "--param", "ball.radius", "--h", "0"],

@@ -271,8 +271,8 @@ fn reverse_mode_equals_forward_mode() {
         .collect();
         let layout = GradientLayout::select(&scene, &params, &[]).unwrap();
         let mut options = diff_options(4, 7);
-        options.boundary.primary_spp = Some(2);
-        options.boundary.secondary_spp = Some(8);
+        options.boundary.primary_spp = Some(2.0);
+        options.boundary.secondary_spp = Some(8.0);
         let mut adjoint = implicit_psdr::film::Image::new(16, 16);
         for (i, v) in adjoint.rgb.iter_mut().enumerate() {
             *v = ((i * 7919) % 13) as f32 / 6.0 - 1.0;

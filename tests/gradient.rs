@@ -89,8 +89,8 @@ fn options(spp: u32, seed: u64, primary: u32, secondary: u32, norm: Normalizatio
         },
         normalization: norm,
         boundary: BoundaryBudget {
-            primary_spp: Some(primary),
-            secondary_spp: Some(secondary),
+            primary_spp: Some(primary as f32),
+            secondary_spp: Some(secondary as f32),
         },
         ..Default::default()
     }

@@ -1,7 +1,7 @@
 //! Inverse rendering of named parameters: from a start 10–20% off, a sphere's centre and radius and a
 //! light's position converge to the values that rendered the target.
 
-use implicit_psdr::integrator::Loss;
+use implicit_psdr::integrator::{BoundaryBudget, Loss};
 use implicit_psdr::optimize::{
     AdamOptions, Decay, ImageScale, Optimization, ResolutionPower, Settings, Terms, View,
     render_targets,
@@ -52,6 +52,7 @@ fn plain_settings() -> Settings {
         views_per_iteration: None,
         seed: 0,
         terms: Terms::Complete,
+        boundary: BoundaryBudget::default(),
         upsample_at: vec![],
         redistance_every: None,
         laplacian: 0.0,
@@ -486,4 +487,66 @@ fn automatic_resolution_power_follows_the_stage_convergence() {
     }
     assert_eq!((converged.power, converged.rate_scale), (2.0, 0.25));
     assert_eq!((moving.power, moving.rate_scale), (1.0, 0.5));
+}
+
+/// `spp_primary` and `spp_secondary`: absent, the primary term takes `diff`'s default and the
+/// secondary term a 64th of `spp` per pixel (a quarter at the race's 16); given, any finite rate
+/// ≥ 0 is kept, fractions included; anything else is refused naming the field.
+#[test]
+fn boundary_budgets_default_and_parse() {
+    use implicit_psdr::optimize::config::{DEFAULT_SECONDARY_SHARE, OptimizeConfig};
+    let race = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse/race");
+    let text = std::fs::read_to_string(race.join("opt.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["scene"] = race.join("start.json").to_str().unwrap().into();
+    json["target"]["scene"] = race.join("target.json").to_str().unwrap().into();
+    let dir = std::env::temp_dir().join(format!("psdr-optimize-budget-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("opt.json");
+    let load = |j: &serde_json::Value| {
+        std::fs::write(&path, serde_json::to_string(j).unwrap()).unwrap();
+        OptimizeConfig::load(&path)
+    };
+    assert_eq!(DEFAULT_SECONDARY_SHARE, 1.0 / 64.0);
+    let cfg = load(&json).unwrap();
+    assert_eq!(
+        cfg.settings.boundary,
+        BoundaryBudget {
+            primary_spp: None,
+            secondary_spp: Some(0.25)
+        }
+    );
+    // 128×128 views: a quarter of a sample per pixel is 4096 tangent-line samples per view.
+    assert_eq!(
+        cfg.settings.boundary.totals(&cfg.scene, cfg.settings.spp),
+        (16384, 4096)
+    );
+    // At least one sample where the rate is positive, none where it is 0.
+    let sparse = BoundaryBudget {
+        primary_spp: Some(0.0),
+        secondary_spp: Some(1e-9),
+    };
+    assert_eq!(sparse.totals(&cfg.scene, 16), (0, 1));
+    let mut j = json.clone();
+    j["spp_primary"] = serde_json::json!(0.5);
+    j["spp_secondary"] = serde_json::json!(2);
+    let cfg = load(&j).unwrap();
+    assert_eq!(
+        cfg.settings.boundary,
+        BoundaryBudget {
+            primary_spp: Some(0.5),
+            secondary_spp: Some(2.0)
+        }
+    );
+    for (key, value) in [
+        ("spp_secondary", serde_json::json!(-1)),
+        ("spp_primary", serde_json::json!("many")),
+        ("spp_secondary", serde_json::json!(1e39)),
+    ] {
+        let mut j = json.clone();
+        j[key] = value.clone();
+        let message = load(&j).unwrap_err().to_string();
+        assert!(message.contains(key), "{value}: {message}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -98,7 +98,10 @@ def test_errors_speak_python(small):
         (lambda: ip.render(scene, spp=-1), "spp: must be >= 1, got -1"),
         (lambda: ip.render(scene, seed=-1), r"seed: must be in \[0, 2\*\*64\), got -1"),
         (lambda: ip.render(scene, threads=-2), "threads: must be >= 1, got -2"),
-        (lambda: ip.diff(scene, "ball.radius", spp_primary=-1), "spp_primary: must be >= 0"),
+        (lambda: ip.diff(scene, "ball.radius", spp_primary=-1), "spp_primary: must be a finite number >= 0"),
+        (lambda: ip.grad(scene, adjoint=np.ones((12, 16, 3)), params="ball.radius",
+                         spp_secondary=float("nan")),
+         "spp_secondary: must be a finite number >= 0, got NaN"),
         (lambda: ip.grad(scene, adjoint=np.ones((12, 16, 3)), params="ball.radius", spp=-3),
          "spp: must be >= 1, got -3"),
     ]:
@@ -106,6 +109,10 @@ def test_errors_speak_python(small):
             call()
     with pytest.raises(TypeError, match="params: expected a name or a list of names"):
         ip.diff(scene, 3)
+    # Boundary budgets may be fractional: a quarter of a sample per pixel is still a secondary term.
+    quarter = ip.diff(scene, "ball.radius", terms=True, spp_secondary=0.25)
+    assert "d_secondary.ball.radius" in quarter
+    assert np.isfinite(quarter["d.ball.radius"]).all()
     # A single name is a list of one.
     one = ip.diff(scene, "ball.radius")
     assert np.array_equal(one["d.ball.radius"], ip.diff(scene, ["ball.radius"])["d.ball.radius"])

@@ -148,14 +148,14 @@ pub(crate) struct MeshArgs {
 /// How a derivative is estimated besides the samples of the image, shared by `diff` and `grad`.
 #[derive(Args, Debug)]
 pub(crate) struct EstimatorArgs {
-    /// Boundary samples per pixel for the secondary (shadow) term; 0 skips it [default: spp/8,
-    /// rounded up].
-    #[arg(long)]
-    pub(crate) spp_secondary: Option<u32>,
-    /// Silhouette-curve samples per pixel for the primary (silhouette) term; 0 skips it [default:
-    /// spp/32, rounded up].
-    #[arg(long)]
-    pub(crate) spp_primary: Option<u32>,
+    /// Boundary samples per pixel for the secondary (shadow) term, a number >= 0 that may be
+    /// fractional (0.25: one sample per four pixels); 0 skips it [default: spp/8, rounded up].
+    #[arg(long, allow_negative_numbers = true, value_parser = non_negative_f32)]
+    pub(crate) spp_secondary: Option<f32>,
+    /// Silhouette-curve samples per pixel for the primary (silhouette) term, a number >= 0 that may
+    /// be fractional; 0 skips it [default: spp/32, rounded up].
+    #[arg(long, allow_negative_numbers = true, value_parser = non_negative_f32)]
+    pub(crate) spp_primary: Option<f32>,
     /// Pixel normalisation: `differentiable` (F / W, both differentiated: lower error) or `fixed`
     /// (the filter-weight sum is a constant).
     #[arg(long, default_value = "differentiable")]

@@ -67,38 +67,47 @@ impl Default for RenderOptions {
     }
 }
 
-/// Boundary samples per pixel of each boundary term; `None` takes the default for the camera's samples
-/// per pixel ([`BoundaryBudget::resolve`]), 0 skips the term.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+/// Boundary samples per pixel of each boundary term, a number ≥ 0 that may be fractional (the term
+/// takes `rate × pixels` samples, rounded, at least one); `None` takes the default for the camera's
+/// samples per pixel ([`BoundaryBudget::resolve`]), 0 skips the term.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
 pub struct BoundaryBudget {
     /// Silhouette-curve samples per pixel for the primary (silhouette) term.
-    pub primary_spp: Option<u32>,
+    pub primary_spp: Option<f32>,
     /// Boundary samples per pixel for the secondary (shadow) term.
-    pub secondary_spp: Option<u32>,
+    pub secondary_spp: Option<f32>,
 }
 
 impl BoundaryBudget {
     /// No boundary samples: the interior term alone.
     pub const NONE: Self = Self {
-        primary_spp: Some(0),
-        secondary_spp: Some(0),
+        primary_spp: Some(0.0),
+        secondary_spp: Some(0.0),
     };
 
     /// Samples per pixel `(primary, secondary)` for `spp` camera samples per pixel; the defaults are
     /// `(⌈spp/32⌉, ⌈spp/8⌉)`, which keep the complete derivative within about 3× the image's time;
     /// `examples/boundary_budgets.rs` measures their error × time against other budgets.
-    pub fn resolve(&self, spp: u32) -> (u32, u32) {
+    pub fn resolve(&self, spp: u32) -> (f32, f32) {
         (
-            self.primary_spp.unwrap_or(spp.div_ceil(32).max(1)),
-            self.secondary_spp.unwrap_or(spp.div_ceil(8).max(1)),
+            (self.primary_spp).unwrap_or(spp.div_ceil(32).max(1) as f32),
+            (self.secondary_spp).unwrap_or(spp.div_ceil(8).max(1) as f32),
         )
     }
 
-    /// Samples `(primary, secondary)` for the whole image of `scene`.
+    /// Samples `(primary, secondary)` for the whole image of `scene`: each rate times the pixels,
+    /// rounded, and at least one where the rate is positive.
     pub fn totals(&self, scene: &Scene, spp: u32) -> (u64, u64) {
         let pixels = scene.camera.width as u64 * scene.camera.height as u64;
         let (p, s) = self.resolve(spp);
-        (p as u64 * pixels, s as u64 * pixels)
+        let total = |rate: f32| {
+            if rate > 0.0 {
+                ((rate as f64 * pixels as f64).round() as u64).max(1)
+            } else {
+                0
+            }
+        };
+        (total(p), total(s))
     }
 }
 

@@ -92,6 +92,9 @@ pub struct Settings {
     pub seed: u64,
     /// Derivative terms.
     pub terms: Terms,
+    /// Boundary samples per pixel of each view's gradient with [`Terms::Complete`] (unset rates take
+    /// `diff`'s defaults for `spp`, [`BoundaryBudget::resolve`]).
+    pub boundary: BoundaryBudget,
     /// Iterations before which every optimised grid is refined `n → 2n − 1` (the same surface,
     /// [`crate::sdf::GridData::refined`]); Adam's state starts afresh.
     pub upsample_at: Vec<u32>,
@@ -517,7 +520,7 @@ impl Optimization {
                 ..RenderOptions::default()
             },
             boundary: match self.settings.terms {
-                Terms::Complete => BoundaryBudget::default(),
+                Terms::Complete => self.settings.boundary,
                 Terms::Interior => BoundaryBudget::NONE,
             },
             ..DiffOptions::default()

@@ -21,6 +21,17 @@ pub(crate) fn count(name: &str, value: Option<i64>, least: u32) -> PyResult<Opti
     }
 }
 
+/// An optional rate argument `name` (a boundary budget in samples per pixel): a finite number ≥ 0.
+pub(crate) fn rate(name: &str, value: Option<f64>) -> PyResult<Option<f32>> {
+    match value {
+        None => Ok(None),
+        Some(v) if v.is_finite() && v >= 0.0 && v <= f32::MAX as f64 => Ok(Some(v as f32)),
+        Some(v) => Err(PyValueError::new_err(format!(
+            "{name}: must be a finite number >= 0, got {v}"
+        ))),
+    }
+}
+
 /// The `seed` argument: an integer in `[0, 2⁶⁴)`.
 pub(crate) fn seed(value: i128) -> PyResult<u64> {
     u64::try_from(value)

@@ -32,7 +32,7 @@ pub(crate) fn render_options(
 pub(crate) fn diff_options(
     scene: &Scene,
     (spp, seed): (Option<i64>, i128),
-    (primary_spp, secondary_spp): (Option<i64>, Option<i64>),
+    (primary_spp, secondary_spp): (Option<f64>, Option<f64>),
     (normalization, velocity_field): (&str, &str),
 ) -> PyResult<DiffOptions> {
     let normalization: Normalization = normalization
@@ -45,8 +45,8 @@ pub(crate) fn diff_options(
         render: render_options(scene, spp, seed)?,
         normalization,
         boundary: BoundaryBudget {
-            primary_spp: args::count("spp_primary", primary_spp, 0)?,
-            secondary_spp: args::count("spp_secondary", secondary_spp, 0)?,
+            primary_spp: args::rate("spp_primary", primary_spp)?,
+            secondary_spp: args::rate("spp_secondary", secondary_spp)?,
         },
         velocity,
     })
@@ -83,7 +83,7 @@ pub(crate) fn render<'py>(
 /// ``.R/.G/.B``: ``"image"``, ``"d.P"`` per parameter, ``"d.NODE.values"`` per direction, and with
 /// ``terms=True`` ``"d_interior.P"``, ``"d_primary.P"``, ``"d_secondary.P"`` (they sum to ``d.P``;
 /// a term with budget 0 is absent). ``spp_primary`` / ``spp_secondary`` are the boundary budgets
-/// (default ``ceil(spp/32)``, ``ceil(spp/8)``), ``normalization`` ``"differentiable"`` or
+/// in samples per pixel, which may be fractional (default ``ceil(spp/32)``, ``ceil(spp/8)``), ``normalization`` ``"differentiable"`` or
 /// ``"fixed"``, ``velocity_field`` ``"auto"``, ``"normal"`` or ``"carried"`` (as ``--velocity-field``).
 #[pyfunction]
 #[pyo3(signature = (scene, params = None, *, spp = None, seed = 0, terms = false,
@@ -98,8 +98,8 @@ pub(crate) fn diff<'py>(
     seed: i128,
     terms: bool,
     grid_directions: Option<&Bound<'py, PyDict>>,
-    spp_primary: Option<i64>,
-    spp_secondary: Option<i64>,
+    spp_primary: Option<f64>,
+    spp_secondary: Option<f64>,
     normalization: &str,
     velocity_field: &str,
     threads: Option<i64>,
