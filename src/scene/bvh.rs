@@ -18,6 +18,16 @@
 //! every one of its shapes' intervals, bit for bit: culling by node never drops a shape that the
 //! shape's own test would keep.
 //!
+//! # Four children at a time
+//!
+//! The walks run on a 4-wide copy of the tree ([`WideNode`]): every binary node's two children are
+//! expanded, largest box first, until it has four, and the four boxes are tested in the lanes of one
+//! SIMD register. Each lane does the node test's operations in the same order (a slab axis the ray
+//! parallels is tested against the grown slab, as there), so a lane's interval is the binary node's,
+//! bit for bit; a lane whose arithmetic is not a number (a zero times an infinite reciprocal) keeps
+//! the interval it had before that axis, which only widens it. Half the levels, a quarter of the
+//! tests' instructions per box.
+//!
 //! # Order
 //!
 //! The nearest-hit query visits shapes in increasing order of where their interval starts (ties by
@@ -27,7 +37,7 @@
 //! the result the same with and without the hierarchy, bit for bit.
 
 use crate::math::{Aabb, Ray};
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 /// Most shapes in a leaf.
 pub(crate) const MAX_LEAF: usize = 2;
@@ -51,11 +61,31 @@ pub(crate) struct Node {
     pub count: u32,
 }
 
+/// The bit of a [`WideNode`] child reference marking a leaf: the rest is the leaf's index in
+/// [`Bvh::nodes`].
+pub(crate) const LEAF: u32 = 1 << 30;
+
+/// A node of the 4-wide tree the walks use: up to four children's boxes, axis by axis, one child per
+/// SIMD lane.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct WideNode {
+    /// Lane `j` of `lo[a]` and `hi[a]`: child `j`'s box on axis `a` (unused lanes: an empty box).
+    pub lo: [Vec4; 3],
+    pub hi: [Vec4; 3],
+    /// Per lane: an inner child's index in [`Bvh::wide`], or [`LEAF`] with a leaf's in [`Bvh::nodes`].
+    pub child: [u32; 4],
+    /// The lanes in use (children are packed from lane 0) as a bit mask.
+    pub lanes: u32,
+}
+
 /// The hierarchy over the shapes of a scene with finite bounds, and the shapes kept apart.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bvh {
-    /// Node 0 is the root (absent when no shape has finite bounds).
+    /// The binary tree the build makes. Node 0 is the root (absent when no shape has finite bounds).
     pub(crate) nodes: Vec<Node>,
+    /// The same tree with four children per node, which the walks use (node 0 is the root, present
+    /// when `nodes` has a root).
+    pub(crate) wide: Vec<WideNode>,
     /// Shape indices, leaves referring to ranges of it.
     pub(crate) order: Vec<u32>,
     /// Shapes with unbounded or empty bounds, tested on every ray, in index order.
@@ -84,6 +114,7 @@ impl Bvh {
         }
         let mut bvh = Self {
             nodes: Vec::new(),
+            wide: Vec::new(),
             order,
             apart,
             bounds: bounds.to_vec(),
@@ -96,8 +127,49 @@ impl Bvh {
                 count: n,
             });
             bvh.split(0, 0);
+            bvh.widen(0);
         }
         bvh
+    }
+
+    /// Appends to [`Bvh::wide`] the 4-wide node of binary node `k` and, below it, its subtree's; returns
+    /// its index. A leaf's wide node has the leaf as its one child.
+    fn widen(&mut self, k: usize) -> u32 {
+        let mut children = vec![k as u32];
+        // Open the inner child with the largest box until there are four (or only leaves).
+        while children.len() < 4 {
+            let open = (children.iter().enumerate())
+                .filter(|&(_, &c)| self.nodes[c as usize].count == 0)
+                .max_by(|a, b| {
+                    let area_of = |c: u32| area(&self.nodes[c as usize].bounds);
+                    area_of(*a.1).total_cmp(&area_of(*b.1))
+                });
+            let Some((j, &c)) = open else { break };
+            let first = self.nodes[c as usize].first;
+            children.splice(j..=j, [first, first + 1]);
+        }
+        let index = self.wide.len();
+        self.wide.push(WideNode {
+            lo: [Vec4::INFINITY; 3],
+            hi: [Vec4::NEG_INFINITY; 3],
+            child: [0; 4],
+            lanes: (1 << children.len()) - 1,
+        });
+        for (j, &c) in children.iter().enumerate() {
+            let node = self.nodes[c as usize];
+            let child = if node.count == 0 {
+                self.widen(c as usize)
+            } else {
+                LEAF | c
+            };
+            let w = &mut self.wide[index];
+            for a in 0..3 {
+                w.lo[a][j] = node.bounds.min[a];
+                w.hi[a][j] = node.bounds.max[a];
+            }
+            w.child[j] = child;
+        }
+        index as u32
     }
 
     /// Whether the hierarchy was built for shapes with exactly these bounds (same count, same boxes).
@@ -278,6 +350,31 @@ impl RaySlabs {
         let t1 = t_max.min((hi + self.grow).min_element());
         (t0 <= t1).then_some((t0, t1))
     }
+
+    /// [`RaySlabs::node_interval`] of a wide node's four children at once: the lanes kept (a bit mask
+    /// of [`WideNode::lanes`]) and each lane's interval (see the [module docs](self)).
+    #[inline]
+    pub fn wide_interval(&self, n: &WideNode, t_min: f32, t_max: f32) -> (u32, Vec4, Vec4) {
+        let mut t0 = Vec4::splat(t_min);
+        let mut t1 = Vec4::splat(t_max);
+        let mut keep = n.lanes;
+        for a in 0..3 {
+            let o = Vec4::splat(self.o[a]);
+            if self.parallel.test(a) {
+                let r = Vec4::splat(self.r);
+                let outside = o.cmplt(n.lo[a] - r) | o.cmpgt(n.hi[a] + r);
+                keep &= !outside.bitmask();
+                continue;
+            }
+            let (inv, grow) = (Vec4::splat(self.inv[a]), Vec4::splat(self.grow[a]));
+            let ta = (n.lo[a] - o) * inv;
+            let tb = (n.hi[a] - o) * inv;
+            // `x.max(t0)` keeps `t0` where `x` is NaN (SSE's max returns its second operand then).
+            t0 = (ta.min(tb) - grow).max(t0);
+            t1 = (ta.max(tb) + grow).min(t1);
+        }
+        (keep & !t0.cmpgt(t1).bitmask(), t0, t1)
+    }
 }
 
 /// An entry of the nearest-hit query's priority queue: a node or a shape, keyed by where its interval
@@ -420,6 +517,80 @@ mod tests {
         moved[0].max.x += 1.0;
         assert!(!bvh.fits(moved.iter()));
         assert!(!bvh.fits(b[1..].iter()));
+    }
+
+    #[test]
+    fn the_wide_tree_holds_every_leaf_once_and_its_lanes_test_as_the_binary_nodes() {
+        let b = boxes(300, 5);
+        let bvh = Bvh::build(&b);
+        // Every binary leaf is referenced by exactly one lane, inside its wide ancestors' lanes.
+        let mut leaves = vec![0; bvh.nodes.len()];
+        let mut stack = vec![0u32];
+        while let Some(k) = stack.pop() {
+            let w = bvh.wide[k as usize];
+            assert!(w.lanes != 0 && w.lanes < 16 && (w.lanes + 1).is_power_of_two());
+            for j in 0..w.lanes.count_ones() as usize {
+                let c = w.child[j];
+                if c & LEAF != 0 {
+                    let leaf = (c & !LEAF) as usize;
+                    assert!(bvh.nodes[leaf].count > 0);
+                    leaves[leaf] += 1;
+                    let n = bvh.nodes[leaf].bounds;
+                    assert_eq!((w.lo[0][j], w.hi[2][j]), (n.min.x, n.max.z));
+                } else {
+                    stack.push(c);
+                }
+            }
+        }
+        for (k, n) in bvh.nodes.iter().enumerate() {
+            assert_eq!(leaves[k], usize::from(n.count > 0), "node {k}");
+        }
+        // Each lane's interval is the binary node test's, bit for bit, rays parallel to axes included.
+        let root = bvh.nodes[0].bounds;
+        let margin = |t: f32| 1e-3 * (1.0 + t.abs());
+        let mut s = 17u32;
+        let mut u = move || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut kept = 0;
+        for k in 0..3000 {
+            let w = &bvh.wide[k % bvh.wide.len()];
+            // Aimed at one of the node's boxes (some rays graze or miss it), or axis-parallel.
+            let j = k % w.lanes.count_ones() as usize;
+            let aim = Vec3::new(w.lo[0][j], w.lo[1][j], w.lo[2][j]).lerp(
+                Vec3::new(w.hi[0][j], w.hi[1][j], w.hi[2][j]),
+                0.5 + 0.7 * u(),
+            );
+            let o = Vec3::new(u(), u(), u()) * 15.0;
+            let d = match k % 5 {
+                0 => Vec3::Y,
+                1 => Vec3::new(0.0, u(), u()).normalize(),
+                _ => (aim - o).normalize(),
+            };
+            let slabs = RaySlabs::new(&Ray::new(o, d), &root, 0.0, margin);
+            let (lanes, t0, t1) = slabs.wide_interval(w, 0.0, 40.0);
+            for j in 0..w.lanes.count_ones() as usize {
+                let c = w.child[j];
+                let node = if c & LEAF != 0 {
+                    bvh.nodes[(c & !LEAF) as usize].bounds
+                } else {
+                    let v = &bvh.wide[c as usize];
+                    (0..v.lanes.count_ones() as usize).fold(Aabb::EMPTY, |a, i| {
+                        let lo = Vec3::new(v.lo[0][i], v.lo[1][i], v.lo[2][i]);
+                        a.union(&Aabb::new(
+                            lo,
+                            Vec3::new(v.hi[0][i], v.hi[1][i], v.hi[2][i]),
+                        ))
+                    })
+                };
+                let want = slabs.node_interval(&node, 0.0, 40.0);
+                let got = (lanes & (1 << j) != 0).then(|| (t0[j], t1[j]));
+                assert_eq!(got, want, "ray {k}, lane {j}");
+                kept += usize::from(got.is_some());
+            }
+        }
+        assert!(kept > 1000, "{kept}");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Ray queries against a scene's shapes: the nearest hit and whether anything lies within a distance,
 //! through the scene's [`Bvh`] or, for few shapes, shape by shape.
 
-use super::bvh::{Entry, Queue, RaySlabs, SHAPE};
+use super::bvh::{Entry, LEAF, Queue, RaySlabs, SHAPE};
 use super::{Bvh, Hit, Intersection, Scene, Surface};
 use crate::math::Ray;
 use crate::trace::{ShapeTrace, TraceSettings};
@@ -199,33 +199,40 @@ impl Scene {
                     self.trace_shape(i, ray, e.t0, e.t1.min(nearest.t), spread, nearest);
                     continue;
                 }
-                let node = bvh.nodes[e.tag as usize];
-                if node.count == 0 {
-                    let child = |c: u32| {
-                        let (t0, t1) =
-                            slabs.node_interval(&bvh.nodes[c as usize].bounds, 0.0, nearest.t)?;
-                        Some(Entry { t0, t1, tag: c })
-                    };
-                    let (a, b) = (child(node.first), child(node.first + 1));
-                    let (near, far) = match (a, b) {
-                        (Some(x), Some(y)) if y.before(&x) => (Some(y), Some(x)),
-                        (x, y) => (x.or(y), x.and(y)),
-                    };
-                    if let Some(far) = far {
-                        queue.push(far);
-                    }
-                    // The nearer child goes on at once when it would be popped next anyway.
-                    if let Some(near) = near {
-                        if queue.comes_first(&near) {
-                            next = Some(near);
-                        } else {
-                            queue.push(near);
-                        }
-                    }
-                } else {
+                if e.tag & LEAF != 0 {
+                    let node = bvh.nodes[(e.tag & !LEAF) as usize];
                     let range = node.first as usize..(node.first + node.count) as usize;
                     for &i in &bvh.order[range] {
                         push_shape(&mut queue, i);
+                    }
+                    continue;
+                }
+                let node = &bvh.wide[e.tag as usize];
+                let (mut lanes, t0, t1) = slabs.wide_interval(node, 0.0, nearest.t);
+                // The first child goes on at once when it would be popped next anyway.
+                let mut first: Option<Entry> = None;
+                while lanes != 0 {
+                    let j = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let child = Entry {
+                        t0: t0[j],
+                        t1: t1[j],
+                        tag: node.child[j],
+                    };
+                    match first {
+                        Some(f) if !child.before(&f) => queue.push(child),
+                        _ => {
+                            if let Some(f) = first.replace(child) {
+                                queue.push(f);
+                            }
+                        }
+                    }
+                }
+                if let Some(f) = first {
+                    if queue.comes_first(&f) {
+                        next = Some(f);
+                    } else {
+                        queue.push(f);
                     }
                 }
             }
@@ -301,7 +308,7 @@ impl Scene {
         if slabs.node_interval(&root.bounds, 0.0, t_max).is_none() {
             return false;
         }
-        // Depth first, the nearer child first: an occluder near the start ends the walk early.
+        // Depth first, nearer children first: an occluder near the start ends the walk early.
         let mut stack = [0u32; STACK];
         let mut spill = Vec::new();
         let mut top = 1;
@@ -314,8 +321,8 @@ impl Scene {
             } else {
                 return false;
             };
-            let node = bvh.nodes[k as usize];
-            if node.count > 0 {
+            if k & LEAF != 0 {
+                let node = bvh.nodes[(k & !LEAF) as usize];
                 let range = node.first as usize..(node.first + node.count) as usize;
                 if bvh.order[range]
                     .iter()
@@ -325,19 +332,23 @@ impl Scene {
                 }
                 continue;
             }
-            let (a, b) = (node.first, node.first + 1);
-            let hit = |c: u32| {
-                let child = &bvh.nodes[c as usize].bounds;
-                slabs
-                    .node_interval(child, 0.0, t_max)
-                    .map(|(t0, _)| (t0, c))
-            };
-            let (near, far) = match (hit(a), hit(b)) {
-                (Some(x), Some(y)) if y.0 < x.0 => (Some(y), Some(x)),
-                (x, y) => (x.or(y), x.and(y)),
-            };
-            // Pushed far first, so the near child is popped next.
-            for (_, c) in [far, near].into_iter().flatten() {
+            let node = &bvh.wide[k as usize];
+            let (mut lanes, t0, _) = slabs.wide_interval(node, 0.0, t_max);
+            // The kept children, farthest first (pushed first, popped last).
+            let mut kept = [(0.0f32, 0u32); 4];
+            let mut n = 0;
+            while lanes != 0 {
+                let j = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let mut m = n;
+                while m > 0 && kept[m - 1].0 < t0[j] {
+                    kept[m] = kept[m - 1];
+                    m -= 1;
+                }
+                kept[m] = (t0[j], node.child[j]);
+                n += 1;
+            }
+            for &(_, c) in &kept[..n] {
                 if top < STACK {
                     stack[top] = c;
                     top += 1;
