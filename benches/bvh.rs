@@ -8,6 +8,10 @@
 //! children, against evaluating every child at every step, that at 1 spp) beside the 1,000 separate
 //! shapes and one ball.
 //!
+//! Then Mitsuba 3 on the same scenes at 1 and 1,000 balls, when its Python package imports
+//! (`benches/mitsuba_balls.py` through `$MITSUBA_PYTHON`, else `python3`; Dr.Jit's LLVM backend may
+//! need `DRJIT_LIBLLVM_PATH`); skipped with a line saying so otherwise.
+//!
 //! The machine is shared: medians and ratios. `cargo bench --bench bvh [-- REPS]` (default 3).
 
 #[path = "scenes/many_balls.rs"]
@@ -65,6 +69,31 @@ fn time(reps: usize, mut f: impl FnMut()) -> f64 {
     )
 }
 
+/// Mitsuba 3's M samples/s on the `n`-ball scene (median of `reps` renders after one that compiles its
+/// kernels), or why it was not measured.
+fn mitsuba_rate(n: usize, reps: usize) -> Result<f64, String> {
+    let python = std::env::var("MITSUBA_PYTHON").unwrap_or_else(|_| "python3".into());
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("psdr-bench-bvh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let path = dir.join(format!("balls{n}.json"));
+    std::fs::write(&path, many_balls::many_balls(n, 1)).map_err(|e| e.to_string())?;
+    let out = std::process::Command::new(&python)
+        .arg(root.join("benches/mitsuba_balls.py"))
+        .arg(&path)
+        .arg(reps.to_string())
+        .output();
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = out.map_err(|e| format!("{python}: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    (text.lines())
+        .find_map(|l| l.strip_prefix("M samples/s: ")?.trim().parse().ok())
+        .ok_or_else(|| {
+            let err = String::from_utf8_lossy(&out.stderr);
+            err.lines().last().unwrap_or("no output").to_string()
+        })
+}
+
 fn main() {
     let reps: usize = std::env::args()
         .skip(1)
@@ -92,7 +121,8 @@ fn main() {
         });
         let (a, b) = (samples / t_with / 1e6, samples / t_without / 1e6);
         if n == 1 {
-            one = a;
+            // Below five shapes both run the same code: both timings measure one ball.
+            one = 0.5 * (a + b);
         }
         println!(
             "  {n:5}   {a:8.3}   {b:8.3}   {:6.1}x   (with BVH / 1 ball: {:.2})",
@@ -100,6 +130,24 @@ fn main() {
             a / one
         );
     }
+    let samples = (16 * 256 * 256) as f64;
+    match (mitsuba_rate(1, reps), mitsuba_rate(1000, reps)) {
+        (Ok(m1), Ok(m1000)) => {
+            let balls = scene(1000);
+            let t = time(reps, || {
+                black_box(render(&balls, &options));
+            });
+            let ours = samples / t / 1e6;
+            println!(
+                "Mitsuba 3 (analytic spheres): 1 ball {m1:.3}, 1000 balls {m1000:.3} \
+                 (1000 / 1: {:.2}); ours at 1000 balls {ours:.3}, ours / Mitsuba {:.2}",
+                m1000 / m1,
+                ours / m1000
+            );
+        }
+        (Err(e), _) | (_, Err(e)) => println!("Mitsuba 3: not measured ({e})"),
+    }
+
     let balls = scene(1000);
     let selection = balls.select(&["ball0.radius"]).expect("ball0 exists");
     let diff = DiffOptions {
@@ -120,7 +168,6 @@ fn main() {
     );
 
     // One union of 1,000 balls against 1,000 shapes and one ball.
-    let samples = (16 * 256 * 256) as f64;
     let rate = |scene: &Scene, options: &RenderOptions, reps: usize| {
         let spp = options.spp as f64;
         samples / 16.0 * spp
