@@ -24,9 +24,9 @@
 //! expanded, largest box first, until it has four, and the four boxes are tested in the lanes of one
 //! SIMD register. Each lane does the node test's operations in the same order (a slab axis the ray
 //! parallels is tested against the grown slab, as there), so a lane's interval is the binary node's,
-//! bit for bit; a lane whose arithmetic is not a number (a zero times an infinite reciprocal) keeps
-//! the interval it had before that axis, which only widens it. Half the levels, a quarter of the
-//! tests' instructions per box.
+//! bit for bit; where an axis's arithmetic gives no number (a zero times an infinite reciprocal) the
+//! lane keeps the interval it had before that axis, which only widens it. Half the levels, and a
+//! node's boxes in one pass.
 //!
 //! # Order
 //!
