@@ -482,6 +482,23 @@ mod tests {
             .collect()
     }
 
+    /// A fixed sequence of numbers in [-1, 1) per seed.
+    fn signed_uniform(seed: u32) -> impl FnMut() -> f32 {
+        let mut s = seed;
+        move || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        }
+    }
+
+    /// The box in lane `j` of a wide node.
+    fn lane_box(w: &WideNode, j: usize) -> Aabb {
+        Aabb::new(
+            Vec3::new(w.lo[0][j], w.lo[1][j], w.lo[2][j]),
+            Vec3::new(w.hi[0][j], w.hi[1][j], w.hi[2][j]),
+        )
+    }
+
     #[test]
     fn every_finite_shape_is_in_one_leaf_inside_its_ancestors() {
         let mut b = boxes(500, 7);
@@ -535,8 +552,7 @@ mod tests {
                     let leaf = (c & !LEAF) as usize;
                     assert!(bvh.nodes[leaf].count > 0);
                     leaves[leaf] += 1;
-                    let n = bvh.nodes[leaf].bounds;
-                    assert_eq!((w.lo[0][j], w.hi[2][j]), (n.min.x, n.max.z));
+                    assert_eq!(lane_box(&w, j), bvh.nodes[leaf].bounds);
                 } else {
                     stack.push(c);
                 }
@@ -548,20 +564,14 @@ mod tests {
         // Each lane's interval is the binary node test's, bit for bit, rays parallel to axes included.
         let root = bvh.nodes[0].bounds;
         let margin = |t: f32| 1e-3 * (1.0 + t.abs());
-        let mut s = 17u32;
-        let mut u = move || {
-            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
-            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut u = signed_uniform(17);
         let mut kept = 0;
         for k in 0..3000 {
             let w = &bvh.wide[k % bvh.wide.len()];
             // Aimed at one of the node's boxes (some rays graze or miss it), or axis-parallel.
             let j = k % w.lanes.count_ones() as usize;
-            let aim = Vec3::new(w.lo[0][j], w.lo[1][j], w.lo[2][j]).lerp(
-                Vec3::new(w.hi[0][j], w.hi[1][j], w.hi[2][j]),
-                0.5 + 0.7 * u(),
-            );
+            let lane = lane_box(w, j);
+            let aim = lane.min.lerp(lane.max, 0.5 + 0.7 * u());
             let o = Vec3::new(u(), u(), u()) * 15.0;
             let d = match k % 5 {
                 0 => Vec3::Y,
@@ -576,13 +586,8 @@ mod tests {
                     bvh.nodes[(c & !LEAF) as usize].bounds
                 } else {
                     let v = &bvh.wide[c as usize];
-                    (0..v.lanes.count_ones() as usize).fold(Aabb::EMPTY, |a, i| {
-                        let lo = Vec3::new(v.lo[0][i], v.lo[1][i], v.lo[2][i]);
-                        a.union(&Aabb::new(
-                            lo,
-                            Vec3::new(v.hi[0][i], v.hi[1][i], v.hi[2][i]),
-                        ))
-                    })
+                    (0..v.lanes.count_ones() as usize)
+                        .fold(Aabb::EMPTY, |a, i| a.union(&lane_box(v, i)))
                 };
                 let want = slabs.node_interval(&node, 0.0, 40.0);
                 let got = (lanes & (1 << j) != 0).then(|| (t0[j], t1[j]));
@@ -615,11 +620,7 @@ mod tests {
         let b = boxes(64, 3);
         let parent = b.iter().fold(Aabb::EMPTY, |a, x| a.union(x));
         let margin = |t: f32| 1e-3 * (1.0 + t.abs());
-        let mut s = 11u32;
-        let mut u = move || {
-            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
-            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut u = signed_uniform(11);
         let mut kept = 0;
         for k in 0..4000 {
             let o = Vec3::new(u(), u(), u()) * 30.0;
