@@ -303,6 +303,18 @@ pub(crate) struct RaySlabs {
     r: f32,
     /// `r / |d|` per axis the ray is not parallel to: how far the margin moves a slab's ends.
     grow: Vec3A,
+    /// Per axis, the origin, reciprocal direction and growth in all four lanes, for the wide test.
+    lanes: [AxisLanes; 3],
+    /// Whether the ray parallels some axis (the wide test's general path).
+    any_parallel: bool,
+}
+
+/// One axis of [`RaySlabs`] splatted across the four lanes of a wide node's test.
+#[derive(Copy, Clone, Debug)]
+struct AxisLanes {
+    o: Vec4,
+    inv: Vec4,
+    grow: Vec4,
 }
 
 impl RaySlabs {
@@ -322,12 +334,20 @@ impl RaySlabs {
             ((min - o) * inv).max((max - o) * inv),
         );
         let r = margin(hi.min_element().max(t_min));
+        let grow = Vec3A::select(parallel, Vec3A::ZERO, r * inv.abs());
+        let axis = |a: usize| AxisLanes {
+            o: Vec4::splat(o[a]),
+            inv: Vec4::splat(inv[a]),
+            grow: Vec4::splat(grow[a]),
+        };
         Self {
             o,
             inv,
             parallel,
             r,
-            grow: Vec3A::select(parallel, Vec3A::ZERO, r * inv.abs()),
+            grow,
+            lanes: [axis(0), axis(1), axis(2)],
+            any_parallel: parallel.any(),
         }
     }
 
@@ -355,23 +375,42 @@ impl RaySlabs {
     /// of [`WideNode::lanes`]) and each lane's interval (see the [module docs](self)).
     #[inline]
     pub fn wide_interval(&self, n: &WideNode, t_min: f32, t_max: f32) -> (u32, Vec4, Vec4) {
+        if self.any_parallel {
+            return self.wide_interval_parallel(n, t_min, t_max);
+        }
+        // The three axes unrolled, branch-free: most rays parallel no axis.
+        let slab = |a: usize, t0: Vec4, t1: Vec4| {
+            let l = &self.lanes[a];
+            let ta = (n.lo[a] - l.o) * l.inv;
+            let tb = (n.hi[a] - l.o) * l.inv;
+            // `x.max(t0)` keeps `t0` where `x` is NaN (SSE's max returns its second operand then).
+            ((ta.min(tb) - l.grow).max(t0), (ta.max(tb) + l.grow).min(t1))
+        };
+        let (t0, t1) = slab(0, Vec4::splat(t_min), Vec4::splat(t_max));
+        let (t0, t1) = slab(1, t0, t1);
+        let (t0, t1) = slab(2, t0, t1);
+        (n.lanes & !t0.cmpgt(t1).bitmask(), t0, t1)
+    }
+
+    /// [`RaySlabs::wide_interval`] for a ray parallel to some axis: that axis's slabs are tested
+    /// against the ray's origin instead.
+    #[cold]
+    fn wide_interval_parallel(&self, n: &WideNode, t_min: f32, t_max: f32) -> (u32, Vec4, Vec4) {
         let mut t0 = Vec4::splat(t_min);
         let mut t1 = Vec4::splat(t_max);
         let mut keep = n.lanes;
         for a in 0..3 {
-            let o = Vec4::splat(self.o[a]);
+            let l = &self.lanes[a];
             if self.parallel.test(a) {
                 let r = Vec4::splat(self.r);
-                let outside = o.cmplt(n.lo[a] - r) | o.cmpgt(n.hi[a] + r);
+                let outside = l.o.cmplt(n.lo[a] - r) | l.o.cmpgt(n.hi[a] + r);
                 keep &= !outside.bitmask();
                 continue;
             }
-            let (inv, grow) = (Vec4::splat(self.inv[a]), Vec4::splat(self.grow[a]));
-            let ta = (n.lo[a] - o) * inv;
-            let tb = (n.hi[a] - o) * inv;
-            // `x.max(t0)` keeps `t0` where `x` is NaN (SSE's max returns its second operand then).
-            t0 = (ta.min(tb) - grow).max(t0);
-            t1 = (ta.max(tb) + grow).min(t1);
+            let ta = (n.lo[a] - l.o) * l.inv;
+            let tb = (n.hi[a] - l.o) * l.inv;
+            t0 = (ta.min(tb) - l.grow).max(t0);
+            t1 = (ta.max(tb) + l.grow).min(t1);
         }
         (keep & !t0.cmpgt(t1).bitmask(), t0, t1)
     }
