@@ -261,6 +261,7 @@ fn nee_estimate(scene: &Scene, p: G3, n: G3, camera: G3, m: usize) -> f64 {
         }],
         lights: vec![],
         strategy: LightStrategy::Derivative,
+        ..PathRecord::default()
     };
     let mut sum = 0.0f64;
     for i in 0..m {
@@ -268,7 +269,9 @@ fn nee_estimate(scene: &Scene, p: G3, n: G3, camera: G3, m: usize) -> f64 {
             let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
             record.lights.clear();
             let strategy = LightStrategy::Derivative;
-            if let Some(lv) = sample_light(scene, strategy, 0, 0, p, n, wo, 0.5, u, &mut counters) {
+            if let Some(lv) =
+                sample_light(scene, strategy, 0, 0, p, n, wo, 0.5, u, None, &mut counters)
+            {
                 record
                     .lights
                     .push(implicit_psdr::integrator::path::LightVertex { mis: 1.0, ..lv });
@@ -329,7 +332,22 @@ fn environment_irradiance_is_pi_l() {
     let (u, wo) = (Vec2::new(0.3, 0.7), camera.normalize());
     let mut counters = TraceCounters::default();
     let image = LightStrategy::Image;
-    assert!(sample_light(&scene, image, 0, 0, G3::ZERO, n, wo, 0.5, u, &mut counters).is_none());
+    assert!(
+        sample_light(
+            &scene,
+            image,
+            0,
+            0,
+            G3::ZERO,
+            n,
+            wo,
+            0.5,
+            u,
+            None,
+            &mut counters
+        )
+        .is_none()
+    );
 }
 
 /// The floor slab whose top face is the plane `y = top`: a box as in the default scene, or the
