@@ -538,7 +538,7 @@ pub(crate) fn trace_path_after(
                 let Some(bs) = scene.shapes[s].bsdf_sample(h.p, h.n, wo, u_bsdf) else {
                     return;
                 };
-                if let Some(env) = sky {
+                if let Some(env) = sky.filter(|_| bs.pdf > 0.0 && bs.pdf.is_finite()) {
                     let pl =
                         light_pdf(scene, record.strategy, env, h.p, bs.wi, h.p + bs.wi, -bs.wi);
                     record.sky_directions.push(SkyDirection {
