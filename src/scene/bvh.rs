@@ -379,17 +379,21 @@ impl RaySlabs {
             return self.wide_interval_parallel(n, t_min, t_max);
         }
         // The three axes unrolled, branch-free: most rays parallel no axis.
-        let slab = |a: usize, t0: Vec4, t1: Vec4| {
-            let l = &self.lanes[a];
-            let ta = (n.lo[a] - l.o) * l.inv;
-            let tb = (n.hi[a] - l.o) * l.inv;
-            // `x.max(t0)` keeps `t0` where `x` is NaN (SSE's max returns its second operand then).
-            ((ta.min(tb) - l.grow).max(t0), (ta.max(tb) + l.grow).min(t1))
-        };
-        let (t0, t1) = slab(0, Vec4::splat(t_min), Vec4::splat(t_max));
-        let (t0, t1) = slab(1, t0, t1);
-        let (t0, t1) = slab(2, t0, t1);
+        let (t0, t1) = self.axis_slabs(n, 0, Vec4::splat(t_min), Vec4::splat(t_max));
+        let (t0, t1) = self.axis_slabs(n, 1, t0, t1);
+        let (t0, t1) = self.axis_slabs(n, 2, t0, t1);
         (n.lanes & !t0.cmpgt(t1).bitmask(), t0, t1)
+    }
+
+    /// The lanes' intervals `[t0, t1]` cut by node `n`'s slabs on axis `a` (one the ray does not
+    /// parallel), grown by the margin.
+    #[inline(always)]
+    fn axis_slabs(&self, n: &WideNode, a: usize, t0: Vec4, t1: Vec4) -> (Vec4, Vec4) {
+        let l = &self.lanes[a];
+        let ta = (n.lo[a] - l.o) * l.inv;
+        let tb = (n.hi[a] - l.o) * l.inv;
+        // `x.max(t0)` keeps `t0` where `x` is NaN (SSE's max returns its second operand then).
+        ((ta.min(tb) - l.grow).max(t0), (ta.max(tb) + l.grow).min(t1))
     }
 
     /// [`RaySlabs::wide_interval`] for a ray parallel to some axis: that axis's slabs are tested
@@ -400,17 +404,13 @@ impl RaySlabs {
         let mut t1 = Vec4::splat(t_max);
         let mut keep = n.lanes;
         for a in 0..3 {
-            let l = &self.lanes[a];
             if self.parallel.test(a) {
-                let r = Vec4::splat(self.r);
-                let outside = l.o.cmplt(n.lo[a] - r) | l.o.cmpgt(n.hi[a] + r);
+                let (o, r) = (self.lanes[a].o, Vec4::splat(self.r));
+                let outside = o.cmplt(n.lo[a] - r) | o.cmpgt(n.hi[a] + r);
                 keep &= !outside.bitmask();
                 continue;
             }
-            let ta = (n.lo[a] - l.o) * l.inv;
-            let tb = (n.hi[a] - l.o) * l.inv;
-            t0 = (ta.min(tb) - l.grow).max(t0);
-            t1 = (ta.max(tb) + l.grow).min(t1);
+            (t0, t1) = self.axis_slabs(n, a, t0, t1);
         }
         (keep & !t0.cmpgt(t1).bitmask(), t0, t1)
     }
