@@ -299,12 +299,11 @@ pub fn sample_light(
     if !(pdf > 0.0 && pdf.is_finite()) {
         return None;
     }
-    let mis = power_heuristic(pdf_w, bsdf_pdf);
     if let Some(sky) = sky.filter(|_| scene.environment == Some(k)) {
         sky.push(SkyDirection {
             from,
             w: es.wi,
-            weight: mis / pdf_w,
+            weight: power_heuristic(pdf_w, bsdf_pdf) / pdf_w,
         });
     }
     let ray = Ray::new(o, es.wi);
@@ -325,7 +324,7 @@ pub fn sample_light(
         p: if infinite { es.wi } else { es.p },
         n: es.n,
         pdf,
-        mis,
+        mis: power_heuristic(pdf_w, bsdf_pdf),
     })
 }
 
@@ -518,8 +517,7 @@ pub(crate) fn trace_path_after(
                 let u_pick = sampler.next_1d();
                 let u_light = sampler.next_2d();
                 let u_bsdf = sampler.next_2d();
-                let diffuse = matches!(scene.shapes[s].bsdf, Bsdf::Diffuse { .. });
-                let sky = sky.filter(|_| diffuse);
+                let sky = sky.filter(|_| matches!(scene.shapes[s].bsdf, Bsdf::Diffuse { .. }));
                 if let Some(lv) = sample_light(
                     scene,
                     record.strategy,
@@ -694,9 +692,14 @@ pub fn contribution_parts<S: Scalar, A: Attach<S> + ?Sized>(
                     };
                     radiance += beta * contrib * S::constant(l.mis);
                 }
-                let skies = &record.sky_directions[sky_at..];
-                let here = skies.iter().take_while(|d| d.from == i).count();
-                if here > 0 {
+                // Image passes record no sky directions: one comparison there.
+                if record
+                    .sky_directions
+                    .get(sky_at)
+                    .is_some_and(|d| d.from == i)
+                {
+                    let skies = &record.sky_directions[sky_at..];
+                    let here = skies.iter().take_while(|d| d.from == i).count();
                     let cv = sky_control_variate(scene, s, (x, n, wo), &skies[..here]);
                     radiance -= beta.detach() * cv;
                     sky_at += here;
