@@ -181,16 +181,19 @@ fn scoop_path() {
             Check {
                 name: "ball.radius",
                 h: 0.02,
-                // Seeds 0 and 1: L2 (0.176, 0.153), sums ≤ (0.098, 0.088); interior alone 0.65.
-                l2: 0.36,
-                sum: 0.2,
+                // Over 32 seeds (0-7, 16-39): L2 mean 0.101, largest 0.135; sums mean 0.070,
+                // largest 0.208 (the smooth pixels', no bias: total - FD -0.10 ± 0.33 there);
+                // interior alone at least 0.85.
+                l2: 0.17,
+                sum: 0.26,
             },
             Check {
                 name: "scoop.translate.x",
                 h: 0.02,
-                // Seeds 0 and 1: L2 (0.062, 0.065), sums ≤ (0.025, 0.015); interior alone 0.46.
-                l2: 0.13,
-                sum: 0.05,
+                // Over the same 32 seeds: L2 mean 0.048, largest 0.066; sums mean 0.024, largest
+                // 0.055; interior alone at least 0.53.
+                l2: 0.082,
+                sum: 0.069,
             },
         ],
         BUDGET,

@@ -143,10 +143,11 @@ fn sun_and_moving_ball_path() {
         SUN,
         PATH,
         &[
-            // Seeds 0 and 1: L2 (0.134, 0.141), sums ≤ 0.025; without the secondary term (0.81, 0.77).
-            check("ball.center.z", 0.2, 0.05),
-            // Seeds 0 and 1: L2 (0.031, 0.036), sums ≤ 0.009.
-            check("sun.direction.y", 0.06, 0.05),
+            // Over 32 seeds (0-7, 16-39): L2 mean 0.109, largest 0.179; sums mean 0.070, largest
+            // 0.173 (the ring's); without the secondary term (0.81, 0.77) at seeds 0 and 1.
+            check("ball.center.z", 0.23, 0.22),
+            // Over the same 32 seeds: L2 mean 0.026, largest 0.046; sums mean 0.012, largest 0.034.
+            check("sun.direction.y", 0.058, 0.043),
         ],
         4,
     );

@@ -179,9 +179,11 @@ fn thin_feature() {
     measure(
         "thin_feature",
         &s,
-        // rod.radius: L2 (0.265, 0.169), sums ≤ 0.054;
-        // interior alone (0.66, 0.66). FD h/2 0.166, noise 0.187.
-        &[check("rod.radius", 0.003, 0.53, 0.11)],
+        // rod.radius over 32 seeds (0-31): L2 mean 0.204, largest 0.316; sums mean 0.129,
+        // largest 0.411 (the ring's: its total's seed-to-seed spread is 28 on a sum of 280, with
+        // no bias, the mean of total - FD 4.5 ± 4.9); interior alone at least 0.62.
+        // FD h/2 0.114, noise 0.095 (seed 0).
+        &[check("rod.radius", 0.003, 0.4, 0.52)],
         16,
     );
 }
@@ -267,9 +269,10 @@ fn light_touching_an_occluder() {
     measure_with(
         "light_touching_an_occluder",
         &s,
-        // ball.center.y: L2 (0.139, 0.108), sums ≤ 0.072;
-        // interior alone (0.62, 0.44). FD h/2 0.076, noise 0.185.
-        &[check("ball.center.y", 0.01, 0.28, 0.15)],
+        // ball.center.y over 32 seeds (0-7, 16-39): L2 mean 0.139, largest 0.324; sums mean
+        // 0.090, largest 0.310 (the ring's, where FD's own noise is largest); interior alone at
+        // least 0.43. FD h/2 0.139, noise 0.231 (seed 0).
+        &[check("ball.center.y", 0.01, 0.41, 0.39)],
         budget,
         20,
     );

@@ -417,13 +417,14 @@ fn sigma_of_mean_difference(a: &[f64], b: &[f64]) -> f64 {
 /// and the BSDF's (in a frame built from the normal's coordinates) are not, so a rotated image
 /// differs from the unrotated one by part of the noise.
 ///
-/// Measured (16×16, 1024 spp): mean abs difference to the unrotated image at the same seed, as a
-/// share of the one between two seeds, `direct` (0.34, 0.31), `path` (0.23, 0.21) (bound 0.7); the
-/// image means differ by (0.39, 0.06) and (0.03, 0.04) standard deviations of a difference of means
-/// (bound 3). The derivative (64 spp, 40,000 + 160,000 boundary samples, the rounded cube's edges
-/// among the shadow term's tangent lines): blurred relative L2 to the unrotated one (0.040, 0.028)
-/// against (0.137, 0.087) between seeds (bound 0.7 of it); image sums rotated −9.04, unrotated
-/// −8.08, unrotated at the other seed −3.95 (seed 1: −3.44, −3.75, −5.58). No ray out of steps.
+/// Measured (16×16, 1024 spp, 24 seeds): mean abs difference to the unrotated image at the same
+/// seed, as a share of the one between two seeds, `direct` 0.69–0.92, `path` 0.61–0.92 (bound 1:
+/// no more than an independent seed's; the camera's film positions, stratified, carry little of
+/// the noise, the unshared sky and BSDF samples most of it); the image means differ by at most 2.3
+/// standard deviations of a difference of means (bound 3). The derivative (64 spp, 40,000 + 160,000
+/// boundary samples, the rounded cube's edges among the shadow term's tangent lines): blurred
+/// relative L2 to the unrotated one summed over four seeds, as a share of the seed-to-seed one
+/// summed over four pairs, 0.24–0.42 (bound 0.7). No ray out of steps.
 #[test]
 fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
     for integrator in ["direct", "path"] {
@@ -449,7 +450,7 @@ fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
             mean_diff / sigma
         );
         assert!(
-            turned_diff <= 0.7 * noise,
+            turned_diff <= noise,
             "{integrator}: rotated image differs by {turned_diff} (seed to seed {noise})"
         );
         assert!(
@@ -475,18 +476,19 @@ fn rotating_the_whole_scene_changes_the_image_only_within_the_noise() {
         );
         gray(&out.total()[0])
     };
-    let a = derivative(0.0, seed(41));
-    let b = derivative(0.0, seed(42));
-    let r = derivative(37.0, seed(41));
-    let noise = blurred_rel_l2(&b, &a, 16, 16, None);
-    let turned_diff = blurred_rel_l2(&r, &a, 16, 16, None);
-    let sum = |v: &[f64]| v.iter().sum::<f64>();
+    // Sums over four seeds: one seed's ratio scatters too widely for a bound (0.16 to 0.79 over 24).
+    let (mut noise, mut turned_diff) = (0.0, 0.0);
+    for base in [41, 43, 45, 47] {
+        let a = derivative(0.0, seed(base));
+        let b = derivative(0.0, seed(base + 1));
+        let r = derivative(37.0, seed(base));
+        noise += blurred_rel_l2(&b, &a, 16, 16, None);
+        turned_diff += blurred_rel_l2(&r, &a, 16, 16, None);
+    }
     println!(
-        "d/d ball.radius: blurred rel L2 {turned_diff:.4} (seed to seed {noise:.4}); sums {:.3} {:.3} \
-         (other seed {:.3})",
-        sum(&r),
-        sum(&a),
-        sum(&b)
+        "d/d ball.radius: blurred rel L2 {turned_diff:.4} (seed to seed {noise:.4}; sums over four \
+         seeds), ratio {:.2}",
+        turned_diff / noise
     );
     assert!(
         turned_diff <= 0.7 * noise,
@@ -916,13 +918,14 @@ fn silhouette_derivative_at_a_170_degree_field_of_view() {
 /// sphere's direction turning by `1/d` per unit of `x`, its angular radius widening by
 /// `1/(d cos α)` per unit of radius), integrated over what its film sees.
 ///
-/// Measured (256 spp, 10⁶ + 10⁴ boundary samples; FD `h = 5e-4` (0.46 px) at 256 spp; four seeds,
-/// `PSDR_TEST_SEED` 0 to 3): image sums, closed form −22,001.6 (`x`) and −22,002.7 (radius);
-/// relative errors of the derivative against FD at most 0.024 (both), against the closed form
-/// 0.0086, of FD against the closed form 0.018; blurred relative L2 against FD 0.028–0.063; the
-/// interior term alone 48–51% off. The silhouette is traced 0.004 px inside the true one (camera
-/// rays resolve a sixteenth of a pixel, 6.8e-5 here, below the sphere's tolerance floor 2e-4).
-/// Bounds: twice the largest of the four.
+/// Measured (256 spp, 10⁶ + 10⁴ boundary samples; FD `h = 5e-4` (0.46 px) at 256 spp; 32 seeds,
+/// `PSDR_TEST_SEED` 0 to 31, 22 of them for the radius): image sums, closed form −22,001.6 (`x`) and
+/// −22,002.7 (radius); relative errors of the derivative against FD mean 0.014, at most 0.048 (`x`;
+/// radius 0.008, 0.016), against the closed form the same, the noise of the ~2,800 primary samples
+/// that land on the film; of FD against the closed form at most 0.0026; blurred relative L2 against
+/// FD 0.031 on average, at most 0.053; the interior term alone 49–53% off. The silhouette is traced
+/// 0.004 px inside the true one (camera rays resolve a sixteenth of a pixel, 6.8e-5 here, below the
+/// sphere's tolerance floor 2e-4). Bounds: 1.25 times the largest of the 32.
 #[test]
 fn silhouette_derivative_at_a_hundredth_of_a_degree() {
     let (fov, size, d) = (0.01, 16, 100.0);
@@ -936,10 +939,10 @@ fn silhouette_derivative_at_a_hundredth_of_a_degree() {
             secondary: 10_000,
             fd_spp: 256,
             h: 5e-4,
-            sum_fd: 0.05,
-            sum_closed: 0.018,
-            fd_sum: 0.035,
-            l2: 0.13,
+            sum_fd: 0.06,
+            sum_closed: 0.059,
+            fd_sum: 0.0033,
+            l2: 0.067,
         },
         52,
     );

@@ -7,7 +7,7 @@ use super::path::{LightStrategy, PathRecord, TraceCounters, contribution, detach
 use crate::camera::CameraFrame;
 use crate::film::{Image, PixelFilm, SampleSink};
 use crate::math::Vec3;
-use crate::sampler::Sampler;
+use crate::sampler::{Sampler, stratified_2d};
 use crate::scene::Scene;
 
 /// Stream of the [`Sampler`] used by camera paths.
@@ -32,7 +32,8 @@ pub fn trace_sample(
     let pixel = y as u64 * camera.width as u64 + x as u64;
     let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-    let offset = camera.filter.sample(sampler.next_2d());
+    let film = stratified_2d(seed, CAMERA_STREAM, pixel, sample as u64);
+    let offset = camera.filter.sample(film);
     let ray = frame.generate_ray(centre + offset);
     trace_path(
         scene,
