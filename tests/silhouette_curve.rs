@@ -371,3 +371,37 @@ fn sphere_silhouette_far_from_the_origin() {
         check_sphere_silhouette_at(s, 1000.0);
     }
 }
+
+/// Tori of major radius 1 and minor radius 1e-2, 3e-3 and 1e-3, tilted, seen from 4 units (on a
+/// 32-pixel film a pixel is 0.09 units there, so the thinnest tube is 1/45 of a pixel across): the
+/// extracted silhouette, the tube's two sides, has their length, `2 · 2π` to first order in the
+/// minor radius, with few open ends. The thinnest tube hides its crossings of the default octree's
+/// face grid between the grid's nodes, keeps its two sides in one box through any split, and
+/// carries `10⁻⁴` of rounding in its normal; before the extraction handled the three, it recovered
+/// 0.44 of the 1e-3 tube's length and 8.1 of the 3e-3 tube's. Measured: length ratios 1.00002,
+/// 1.00000 and 0.9958 with 0, 2 and 16 open ends.
+#[test]
+fn thin_torus_silhouettes_have_both_sides_length() {
+    let eye = Vec3::new(0.0, 2.0, 3.5);
+    for (minor, open_ends) in [(1e-2, 4), (3e-3, 4), (1e-3, 32)] {
+        let shape = shape_at(
+            Sdf::torus([0.0; 3], Vec3::new(0.2, 1.0, 0.1), 1.0, minor),
+            Vec3::ZERO,
+        );
+        let curve = extract_silhouette(&shape, eye, &CurveOptions::default()).unwrap();
+        let ratio = curve.polyline_length() / (4.0 * PI);
+        println!(
+            "minor radius {minor}: length ratio {ratio:.5}, stats {:?}",
+            curve.polyline.stats
+        );
+        assert!(
+            (ratio - 1.0).abs() < 0.01,
+            "minor radius {minor}: length ratio {ratio}"
+        );
+        assert!(
+            curve.polyline.stats.open_ends <= open_ends,
+            "minor radius {minor}: {:?}",
+            curve.polyline.stats
+        );
+    }
+}

@@ -121,12 +121,15 @@ impl CurveFunctions for SilhouetteFunctions<'_> {
         (self.cull).is_none_or(|shape| classify_box_in(shape, self.view, b) == BoxClass::Kept)
     }
 
-    /// `|φ| ≤ 1e-5·scale`, `|ψ| ≤ 1e-5·|∇φ||e(x)|·scale`, `scale = max(1, |x|)` (`e = c − x`, or
-    /// the unit `−ω` along a direction); typically the residuals are at their rounding floor, ~1e-7.
-    fn converged(&self, x: Vec3, phi: f32, psi: f32, gphi: Vec3, _: Vec3) -> bool {
+    /// `|φ| ≤ 1e-5·scale`, `|ψ| ≤ 1e-5·max(|∇φ||e(x)|, |∇ψ|)·scale`, `scale = max(1, |x|)` (`e = c −
+    /// x`, or the unit `−ω` along a direction); typically the residuals are at their rounding floor,
+    /// ~1e-7. The `|∇ψ|` bound is a distance to the curve: where the curvature radius `ρ` is small
+    /// `ψ`'s rounding floor grows as `|e| ε |x|/ρ` (the normal of a torus of minor radius 1e-3 at
+    /// unit distance carries 1e-4 of rounding) while `|∇ψ| ≈ |e|/ρ` grows with it.
+    fn converged(&self, x: Vec3, phi: f32, psi: f32, gphi: Vec3, gpsi: Vec3) -> bool {
         let scale = x.length().max(1.0);
-        phi.abs() <= 1e-5 * scale
-            && psi.abs() <= 1e-5 * scale * gphi.length() * self.view.towards(x).length()
+        let psi_scale = (gphi.length() * self.view.towards(x).length()).max(gpsi.length());
+        phi.abs() <= 1e-5 * scale && psi.abs() <= 1e-5 * scale * psi_scale
     }
 }
 

@@ -13,7 +13,10 @@
 //! the plane. A small grid on the face (`face_grid` cells a side) marks the cells whose corners see a sign
 //! change of both `f` and `g` (for nearly linear `f, g` over a cell, a zero inside means a sign change at
 //! the corners), and Newton's method on the three equations `f = 0, g = 0, x_k = const` starts from their
-//! centres ([`solve_on_plane`]). A face shared by two boxes is seen with the same grid from both sides, so
+//! centres ([`solve_on_plane`]). A feature thinner than a cell (a tube 1/45 of a pixel across) hides
+//! `f`'s zeros between the corners: a cell where `g` changes sign and the distance `f` is within the
+//! cell's diagonal of 0 at a corner (and half of it at the centre) is split in four, recursively, until
+//! its cells see `f` change sign ([`cell_crossings`]). A face shared by two boxes is seen with the same grid from both sides, so
 //! both find bit-identical crossings; vertices are nevertheless welded within `1e-4` of the box size.
 //! - **Two crossings**: the curve piece in the box is the chord between them, refined `refine` times by
 //!   projecting each chord midpoint onto the curve in the plane through the midpoint orthogonal to the chord.
@@ -26,8 +29,11 @@
 //!   de-duplication distance (`1e-3` of the box size, crossings closer than that are merged): the curve
 //!   clips one of its edges or corners (seen on grids); the tiny piece is skipped
 //!   ([`ExtractStats::touching_boxes`]), the neighbours across the edge hold the curve. A box still with
-//!   more crossings is skipped and counted in [`ExtractStats::unresolved_boxes`]. Either may leave open
-//!   ends in the polyline ([`ExtractStats::open_ends`]); the tests find none on their shapes.
+//!   more crossings holds two branches closer than itself (the two sides of a thin tube stay together
+//!   through any split): its crossings are paired along the curve's tangents
+//!   ([`ExtractStats::paired_boxes`]), or, when they do not pair up, the box is skipped and counted in
+//!   [`ExtractStats::unresolved_boxes`]. Skipped boxes may leave open ends in the polyline
+//!   ([`ExtractStats::open_ends`]); the tests find none or a few on their shapes.
 //!
 //! **Sampling.** A segment `[a, b]` with direction `t` is chosen with probability proportional to its
 //! length and `s` uniformly on it, then mapped to the curve point `x(s)` in the plane `(x − a)·t = s`
@@ -94,7 +100,10 @@ pub struct ExtractStats {
     /// Boxes with a single crossing even after `max_split` splits: the curve clips an edge or a corner,
     /// entering and leaving within the de-duplication distance (`1e-3` of the box size); skipped.
     pub touching_boxes: usize,
-    /// Boxes with more than two crossings even after `max_split` splits (skipped).
+    /// Boxes with more than two crossings even after `max_split` splits whose crossings pair up along
+    /// the curve's tangents (two branches closer than the box, e.g. the sides of a thin tube).
+    pub paired_boxes: usize,
+    /// Boxes with more than two crossings even after `max_split` splits that do not pair up (skipped).
     pub unresolved_boxes: usize,
     /// Polyline vertices with one segment (the curve has a gap there).
     pub open_ends: usize,
@@ -246,6 +255,7 @@ pub fn extract_polyline(
         stats.resolved_boxes += st.resolved_boxes;
         stats.empty_boxes += st.empty_boxes;
         stats.unresolved_boxes += st.unresolved_boxes;
+        stats.paired_boxes += st.paired_boxes;
         stats.touching_boxes += st.touching_boxes;
         stats.failed_refinements += st.failed_refinements;
         for [a, e] in pieces {
@@ -362,59 +372,200 @@ fn box_chords(
         // Still one crossing after the splits: entry and exit closer than the de-duplication distance, the
         // curve clips an edge or a corner of the box; its piece here is shorter than 1e-3 of the box size.
         1 => stats.touching_boxes += 1,
-        _ => stats.unresolved_boxes += 1,
+        _ => match pair_along_tangents(fns, &crossings) {
+            Some(chords) => {
+                stats.paired_boxes += 1;
+                out.extend(chords);
+            }
+            None => stats.unresolved_boxes += 1,
+        },
     }
 }
 
+/// Chords joining `crossings` (an even number, at least 4) in pairs that each lie along the curve:
+/// the chord's direction within `acos 0.9` of the unit tangent at both ends, the tangents oriented
+/// the same way along it. Two branches closer together than the box, such as the two sides of a
+/// tube thinner than the box, cross its faces four times and stay together through any split; each
+/// branch's entry and exit pair up this way, while a chord across branches runs across the tangents
+/// or against one of them (the two sides of a tube are oriented oppositely). `None` when some
+/// crossing finds no such partner.
+fn pair_along_tangents(fns: &impl CurveFunctions, crossings: &[Vec3]) -> Option<Vec<[Vec3; 2]>> {
+    if !crossings.len().is_multiple_of(2) {
+        return None;
+    }
+    let tangents: Vec<Vec3> = crossings
+        .iter()
+        .map(|&x| {
+            let (_, _, gf, gg) = fns.eval(x);
+            gf.cross(gg).try_normalize()
+        })
+        .collect::<Option<_>>()?;
+    let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
+    for i in 0..crossings.len() {
+        for j in i + 1..crossings.len() {
+            let Some(d) = (crossings[j] - crossings[i]).try_normalize() else {
+                continue;
+            };
+            let (a, b) = (tangents[i].dot(d), tangents[j].dot(d));
+            if a * b > 0.0 && a.abs().min(b.abs()) >= 0.9 {
+                pairs.push((a.abs().min(b.abs()), i, j));
+            }
+        }
+    }
+    pairs.sort_by(|p, q| q.0.total_cmp(&p.0));
+    let mut taken = vec![false; crossings.len()];
+    let mut chords = Vec::new();
+    for (_, i, j) in pairs {
+        if !taken[i] && !taken[j] {
+            taken[i] = true;
+            taken[j] = true;
+            chords.push([crossings[i], crossings[j]]);
+        }
+    }
+    taken.iter().all(|&t| t).then_some(chords)
+}
+
 /// The distinct crossings of the curve with the six faces of `b`.
+///
+/// Each face cell is searched ([`cell_crossings`]); the node coordinates depend only on the face, so a
+/// face shared by two boxes gives the same crossings from both sides.
 fn face_crossings(fns: &impl CurveFunctions, b: &Aabb, grid: usize) -> Vec<Vec3> {
     let size = b.extent().max_element();
-    let slack = 1e-4 * size;
-    let mut found: Vec<Vec3> = Vec::new();
+    let mut found = Crossings {
+        b,
+        slack: 1e-4 * size,
+        reach: size,
+        points: Vec::new(),
+    };
     for k in 0..3 {
         let (u, v) = ((k + 1) % 3, (k + 2) % 3);
         for c in [b.min[k], b.max[k]] {
-            // Node values of f and g on the face grid; the node coordinates depend only on the face, so a
-            // face shared by two boxes gives the same crossings from both sides.
-            let node = |i: usize, j: usize| {
-                let mut p = Vec3::ZERO;
-                p[k] = c;
-                p[u] = b.min[u] + (b.max[u] - b.min[u]) * (i as f32 / grid as f32);
-                p[v] = b.min[v] + (b.max[v] - b.min[v]) * (j as f32 / grid as f32);
-                p
+            let face = Face { k, u, v, c };
+            let at = |i: usize, j: usize| {
+                (
+                    b.min[u] + (b.max[u] - b.min[u]) * (i as f32 / grid as f32),
+                    b.min[v] + (b.max[v] - b.min[v]) * (j as f32 / grid as f32),
+                )
             };
             let vals: Vec<(f32, f32)> = (0..=grid)
                 .flat_map(|j| (0..=grid).map(move |i| (i, j)))
-                .map(|(i, j)| fns.values(node(i, j)))
+                .map(|(i, j)| fns.values(face.point(at(i, j))))
                 .collect();
-            let at = |i: usize, j: usize| vals[j * (grid + 1) + i];
-            let mut n = Vec3::ZERO;
-            n[k] = 1.0;
+            let value = |i: usize, j: usize| vals[j * (grid + 1) + i];
             for j in 0..grid {
                 for i in 0..grid {
-                    let corners = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
-                    let changes = |f: fn(&(f32, f32)) -> f32| {
-                        let lo = corners.iter().map(f).fold(f32::INFINITY, f32::min);
-                        let hi = corners.iter().map(f).fold(f32::NEG_INFINITY, f32::max);
-                        lo <= 0.0 && hi >= 0.0
-                    };
-                    if !(changes(|q| q.0) && changes(|q| q.1)) {
-                        continue;
-                    }
-                    let start = (node(i, j) + node(i + 1, j + 1)) * 0.5;
-                    let Some(x) = solve_on_plane(fns, start, n, c, size) else {
-                        continue;
-                    };
-                    let inside =
-                        (0..3).all(|m| x[m] >= b.min[m] - slack && x[m] <= b.max[m] + slack);
-                    if inside && found.iter().all(|q| (*q - x).length() > 10.0 * slack) {
-                        found.push(x);
-                    }
+                    let corners = [
+                        value(i, j),
+                        value(i + 1, j),
+                        value(i, j + 1),
+                        value(i + 1, j + 1),
+                    ];
+                    let cell = [at(i, j), at(i + 1, j + 1)];
+                    cell_crossings(fns, &face, cell, corners, THIN_SPLITS, &mut found);
                 }
             }
         }
     }
-    found
+    found.points
+}
+
+/// How many times a face cell that may hide a feature thinner than itself is split in four.
+const THIN_SPLITS: u32 = 6;
+
+/// The face `x_k = c` of a box, with in-face axes `u`, `v`.
+struct Face {
+    k: usize,
+    u: usize,
+    v: usize,
+    c: f32,
+}
+
+impl Face {
+    /// The point of the face with in-face coordinates `(p_u, p_v)`.
+    fn point(&self, (pu, pv): (f32, f32)) -> Vec3 {
+        let mut p = Vec3::ZERO;
+        p[self.k] = self.c;
+        p[self.u] = pu;
+        p[self.v] = pv;
+        p
+    }
+}
+
+/// Crossings found on a box's faces so far, distinct and inside the box.
+struct Crossings<'a> {
+    b: &'a Aabb,
+    slack: f32,
+    reach: f32,
+    points: Vec<Vec3>,
+}
+
+/// Searches the face cell `[lo, hi]` (in-face coordinates; `corners`: `(f, g)` at its corners in the
+/// order `lo`, `(hi_u, lo_v)`, `(lo_u, hi_v)`, `hi`) for crossings.
+///
+/// Newton's method starts from the cell's centre when both `f` and `g` change sign at its corners. A
+/// feature thinner than the cell (the two sides of a tube 1/45 of a pixel across) holds `f`'s zeros
+/// with every corner outside it; `f` being a distance (Lipschitz 1), a cell where `g` changes sign,
+/// `f` is within the cell's diagonal of 0 at a corner and within half of it at the centre may hide
+/// such a feature, and is split in four, up to `splits` times, until its cells see `f` change sign.
+fn cell_crossings(
+    fns: &impl CurveFunctions,
+    face: &Face,
+    [lo, hi]: [(f32, f32); 2],
+    corners: [(f32, f32); 4],
+    splits: u32,
+    found: &mut Crossings,
+) {
+    let changes = |f: fn(&(f32, f32)) -> f32| {
+        let lo = corners.iter().map(f).fold(f32::INFINITY, f32::min);
+        let hi = corners.iter().map(f).fold(f32::NEG_INFINITY, f32::max);
+        lo <= 0.0 && hi >= 0.0
+    };
+    if !changes(|q| q.1) {
+        return;
+    }
+    let mid = (0.5 * (lo.0 + hi.0), 0.5 * (lo.1 + hi.1));
+    if changes(|q| q.0) {
+        let mut n = Vec3::ZERO;
+        n[face.k] = 1.0;
+        let Some(x) = solve_on_plane(fns, face.point(mid), n, face.c, found.reach) else {
+            return;
+        };
+        let (b, slack) = (found.b, found.slack);
+        let inside = (0..3).all(|m| x[m] >= b.min[m] - slack && x[m] <= b.max[m] + slack);
+        if inside
+            && found
+                .points
+                .iter()
+                .all(|q| (*q - x).length() > 10.0 * slack)
+        {
+            found.points.push(x);
+        }
+        return;
+    }
+    // A zero of the distance `f` in the cell is within the diagonal of every corner and within half
+    // of it of the centre.
+    let diagonal = (hi.0 - lo.0).hypot(hi.1 - lo.1);
+    if splits == 0 || corners.iter().all(|q| q.0.abs() > diagonal) {
+        return;
+    }
+    let at = |p: (f32, f32)| fns.values(face.point(p));
+    let centre = at(mid);
+    if centre.0.abs() > 0.5 * diagonal {
+        return;
+    }
+    // Values at the edge midpoints; the sub-cells' corners in the same order as the cell's.
+    let (bottom, top) = (at((mid.0, lo.1)), at((mid.0, hi.1)));
+    let (left, right) = (at((lo.0, mid.1)), at((hi.0, mid.1)));
+    let [c00, c10, c01, c11] = corners;
+    let cells = [
+        ([lo, mid], [c00, bottom, left, centre]),
+        ([(mid.0, lo.1), (hi.0, mid.1)], [bottom, c10, centre, right]),
+        ([(lo.0, mid.1), (mid.0, hi.1)], [left, centre, c01, top]),
+        ([mid, hi], [centre, right, top, c11]),
+    ];
+    for (cell, corners) in cells {
+        cell_crossings(fns, face, cell, corners, splits - 1, found);
+    }
 }
 
 /// Appends the chord `[a, e]` split `levels` times at curve points (midpoints projected onto the curve).
