@@ -499,6 +499,17 @@ struct Crossings<'a> {
     points: Vec<Vec3>,
 }
 
+impl Crossings<'_> {
+    /// Keeps `x` if it lies in the box (within `slack`) and is not one already found.
+    fn push(&mut self, x: Vec3) {
+        let (b, slack) = (self.b, self.slack);
+        let inside = (0..3).all(|m| x[m] >= b.min[m] - slack && x[m] <= b.max[m] + slack);
+        if inside && self.points.iter().all(|q| (*q - x).length() > 10.0 * slack) {
+            self.points.push(x);
+        }
+    }
+}
+
 /// Searches the face cell `[lo, hi]` (in-face coordinates; `corners`: `(f, g)` at its corners in the
 /// order `lo`, `(hi_u, lo_v)`, `(lo_u, hi_v)`, `hi`) for crossings.
 ///
@@ -527,18 +538,8 @@ fn cell_crossings(
     if changes(|q| q.0) {
         let mut n = Vec3::ZERO;
         n[face.k] = 1.0;
-        let Some(x) = solve_on_plane(fns, face.point(mid), n, face.c, found.reach) else {
-            return;
-        };
-        let (b, slack) = (found.b, found.slack);
-        let inside = (0..3).all(|m| x[m] >= b.min[m] - slack && x[m] <= b.max[m] + slack);
-        if inside
-            && found
-                .points
-                .iter()
-                .all(|q| (*q - x).length() > 10.0 * slack)
-        {
-            found.points.push(x);
+        if let Some(x) = solve_on_plane(fns, face.point(mid), n, face.c, found.reach) {
+            found.push(x);
         }
         return;
     }
