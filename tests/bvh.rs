@@ -1,7 +1,9 @@
 //! The scene's bounding volume hierarchy against testing every shape: the same nearest hit, bit for bit,
 //! and the same answer to "is anything in the way", on many random rays through random scenes of many
 //! shapes (hits, misses, grazes, rays starting on surfaces, successive hits along lines), near the
-//! origin and far from it; and the same image and derivative image of a scene of many balls.
+//! origin and far from it; the shapes gathered for a pixel's camera rays hold every shape those rays
+//! meet (tiny fields of view, far from the origin, the eye inside shapes' boxes); and the same image
+//! and derivative image of a scene of many balls.
 
 mod common;
 
@@ -14,6 +16,7 @@ use implicit_psdr::integrator::{
     DiffOptions, IntegratorKind, RenderOptions, render, render_derivatives,
 };
 use implicit_psdr::math::Ray;
+use implicit_psdr::scene::frustum::PixelShapes;
 use implicit_psdr::scene::{Intersection, Scene, Shape, Surface};
 use implicit_psdr::sdf::Sdf;
 
@@ -249,6 +252,79 @@ fn far_from_the_origin_the_hierarchy_still_keeps_every_shape() {
         let scene = random_scene(150, seed, offset, true);
         let met = compare(&scene, 300, seed + 200);
         assert!(met.hits > 50 && met.misses > 20, "{offset}: {met:?}");
+    }
+}
+
+/// For every pixel of `scene`'s camera, the shapes [`PixelShapes`] gathers hold every shape that
+/// camera rays through the pixel's filter support meet (their intervals along the ray are empty for
+/// the others), and tracing them alone gives the intersection tracing the scene does, bit for bit.
+/// Film offsets on a grid over the filter's sampling domain, its corners included. Returns the
+/// number of rays that hit a shape.
+fn pixel_shapes_hold_what_camera_rays_meet(scene: &Scene, what: &str) -> usize {
+    let frame = scene.camera.frame::<f32>();
+    let filter = scene.camera.filter;
+    let mut gathered = PixelShapes::default();
+    let mut hits = 0;
+    const GRID: usize = 5;
+    for y in 0..scene.camera.height {
+        for x in 0..scene.camera.width {
+            let shapes = gathered
+                .gather(scene, &frame, x, y, 16)
+                .unwrap_or_else(|| panic!("{what}: no shapes gathered at ({x}, {y})"))
+                .to_vec();
+            assert!(shapes.windows(2).all(|w| w[0] < w[1]), "{what}: order");
+            for k in 0..GRID * GRID {
+                let u = |i: usize| (i as f32 / (GRID - 1) as f32).min(1.0 - f32::EPSILON);
+                let offset = filter.sample(glam::Vec2::new(u(k % GRID), u(k / GRID)));
+                let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let ray = frame.generate_ray(centre + offset);
+                for (i, shape) in scene.shapes.iter().enumerate() {
+                    if !shapes.contains(&(i as u32)) {
+                        assert_eq!(
+                            scene.trace_interval(shape, &ray, f32::INFINITY),
+                            None,
+                            "{what}: pixel ({x}, {y}) offset {offset} dropped shape {i}"
+                        );
+                    }
+                }
+                let spread = frame.spread(ray.d);
+                let among = scene.intersect_among(&ray, f32::INFINITY, spread, &shapes);
+                let all = scene.intersect_resolving(&ray, f32::INFINITY, spread);
+                assert_eq!(among, all, "{what}: pixel ({x}, {y}) offset {offset}");
+                hits += matches!(all, Intersection::Hit(_)) as usize;
+            }
+        }
+    }
+    hits
+}
+
+#[test]
+fn a_pixels_shapes_hold_every_shape_its_camera_rays_meet() {
+    // The random scenes' camera, far from the origin too; a field of view of a thousandth of a
+    // degree (a pixel is then a few ulps of a direction wide) aimed at a shape; the eye inside
+    // shapes' boxes.
+    for (seed, offset, fov) in [
+        (21, Vec3::ZERO, 40.0),
+        (22, Vec3::new(1e5, -3e4, 2e4), 40.0),
+        (23, Vec3::ZERO, 1e-3),
+        (24, Vec3::new(-4e3, 7e3, 1e4), 1e-3),
+    ] {
+        let mut scene = random_scene(120, seed, offset, true);
+        let target = scene.shapes[0].bounds.center();
+        let eye = scene.camera.origin.value();
+        if fov < 1.0 {
+            scene.camera = Camera::new(eye, target, Vec3::Y, fov, 8, 8, Filter::Tent);
+        }
+        let what = format!("seed {seed}, offset {offset}, fov {fov}");
+        let hits = pixel_shapes_hold_what_camera_rays_meet(&scene, &what);
+        assert!(hits > 40, "{what}: {hits} hits");
+    }
+    for filter in [Filter::Box, Filter::Gaussian] {
+        let mut scene = random_scene(120, 25, Vec3::ZERO, false);
+        let c = scene.shapes[7].bounds.center();
+        scene.camera = Camera::new(c, c + Vec3::Z, Vec3::Y, 90.0, 8, 8, filter);
+        let what = format!("eye inside shape 7's box, {filter:?}");
+        assert!(pixel_shapes_hold_what_camera_rays_meet(&scene, &what) > 0);
     }
 }
 

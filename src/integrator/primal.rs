@@ -3,19 +3,23 @@
 
 use super::driver::{self, RenderStats};
 use super::options::RenderOptions;
-use super::path::{LightStrategy, PathRecord, TraceCounters, contribution, detached, trace_path};
+use super::path::{
+    LightStrategy, PathRecord, TraceCounters, contribution, detached, trace_path_after,
+};
 use crate::camera::CameraFrame;
 use crate::film::{Image, PixelFilm, SampleSink};
 use crate::math::Vec3;
 use crate::sampler::{Sampler, stratified_2d};
 use crate::scene::Scene;
+use crate::scene::frustum::PixelShapes;
 
 /// Stream of the [`Sampler`] used by camera paths.
 pub const CAMERA_STREAM: u64 = 0;
 
 /// Traces camera sample `sample` of pixel `(x, y)` into `record`: draws the film offset from the pixel
 /// filter, generates the ray through it and traces the path. Returns the offset (pixels, from the pixel
-/// centre) and the camera ray. `frame` is `scene.camera.frame::<f32>()`, built once per render.
+/// centre) and the camera ray. `frame` is `scene.camera.frame::<f32>()`, built once per render;
+/// `shapes`, when known, the only shapes the pixel's camera rays can meet ([`PixelShapes::gather`]).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn trace_sample(
@@ -25,6 +29,7 @@ pub fn trace_sample(
     x: u32,
     y: u32,
     sample: u32,
+    shapes: Option<&[u32]>,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> (glam::Vec2, crate::math::Ray) {
@@ -35,11 +40,17 @@ pub fn trace_sample(
     let film = stratified_2d(seed, CAMERA_STREAM, pixel, sample as u64);
     let offset = camera.filter.sample(film);
     let ray = frame.generate_ray(centre + offset);
-    trace_path(
+    let spread = frame.spread(ray.d);
+    let max_scatter = scene.integrator.max_scatter();
+    let first = (max_scatter > 0).then(|| match shapes {
+        Some(shapes) => scene.intersect_among(&ray, f32::INFINITY, spread, shapes),
+        None => scene.intersect_resolving(&ray, f32::INFINITY, spread),
+    });
+    trace_path_after(
         scene,
         ray,
-        frame.spread(ray.d),
-        scene.integrator.max_scatter(),
+        first,
+        max_scatter,
         &mut sampler,
         record,
         counters,
@@ -48,7 +59,7 @@ pub fn trace_sample(
 }
 
 /// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
-/// `frame` is `scene.camera.frame::<f32>()`, built once per render.
+/// `frame` and `shapes` as for [`trace_sample`].
 #[allow(clippy::too_many_arguments)]
 pub fn sample_pixel(
     scene: &Scene,
@@ -57,10 +68,11 @@ pub fn sample_pixel(
     x: u32,
     y: u32,
     sample: u32,
+    shapes: Option<&[u32]>,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> glam::Vec3 {
-    trace_sample(scene, frame, seed, x, y, sample, record, counters);
+    trace_sample(scene, frame, seed, x, y, sample, shapes, record, counters);
     contribution::<f32>(scene, record, detached).into()
 }
 
@@ -96,8 +108,10 @@ pub(crate) fn render_with(
                 ..PathRecord::default()
             };
             let mut counters = TraceCounters::default();
+            let mut pixel_shapes = PixelShapes::default();
             for x in 0..width {
                 let pixel = (y * width + x) as usize;
+                let shapes = pixel_shapes.gather(scene, &frame, x, y, spp);
                 for s in 0..spp {
                     let l = sample_pixel(
                         scene,
@@ -106,6 +120,7 @@ pub(crate) fn render_with(
                         x,
                         y,
                         s,
+                        shapes,
                         &mut record,
                         &mut counters,
                     );

@@ -45,7 +45,7 @@ impl Scene {
     /// The hierarchy, when the queries use it: switched on, built for as many shapes as the scene has,
     /// and more than a few of them.
     #[inline]
-    fn hierarchy(&self) -> Option<&Bvh> {
+    pub(super) fn hierarchy(&self) -> Option<&Bvh> {
         let n = self.shapes.len();
         (self.use_bvh && n > MIN_BVH_SHAPES && self.bvh.len() == n).then_some(&*self.bvh)
     }
@@ -63,6 +63,36 @@ impl Scene {
         spread: f32,
         leaving: Option<usize>,
     ) -> Intersection {
+        let mut nearest = self.nearest_emitter(ray, t_max);
+        match self.hierarchy() {
+            Some(bvh) => self.nearest_in(bvh, ray, spread, leaving, &mut nearest),
+            None => {
+                let shapes = (0..self.shapes.len()).filter(|&i| Some(i) != leaving);
+                self.nearest_each(ray, spread, shapes, self.shapes.len(), &mut nearest);
+            }
+        }
+        self.nearest_hit(ray, nearest)
+    }
+
+    /// [`Scene::nearest`] for a camera ray (no shape left) that can meet no shape but `shapes` (in
+    /// increasing index order) and the emitters: the same result, bit for bit, when every other
+    /// shape's interval along the ray is empty ([`super::frustum`]).
+    pub(super) fn nearest_among(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        spread: f32,
+        shapes: &[u32],
+    ) -> Intersection {
+        let mut nearest = self.nearest_emitter(ray, t_max);
+        let each = shapes.iter().map(|&i| i as usize);
+        self.nearest_each(ray, spread, each, shapes.len(), &mut nearest);
+        self.nearest_hit(ray, nearest)
+    }
+
+    /// The nearest finite emitter `ray` meets in `(0, t_max)`: where [`Scene::nearest`] starts.
+    #[inline]
+    fn nearest_emitter(&self, ray: &Ray, t_max: f32) -> Nearest {
         let mut nearest = Nearest {
             t: t_max,
             surface: None,
@@ -79,10 +109,12 @@ impl Scene {
                 };
             }
         }
-        match self.hierarchy() {
-            Some(bvh) => self.nearest_in(bvh, ray, spread, leaving, &mut nearest),
-            None => self.nearest_each(ray, spread, leaving, &mut nearest),
-        }
+        nearest
+    }
+
+    /// The intersection of the nearest surface found, with its normal.
+    #[inline]
+    fn nearest_hit(&self, ray: &Ray, nearest: Nearest) -> Intersection {
         match nearest.surface {
             Some(surface) => {
                 let p = ray.at(nearest.t);
@@ -102,15 +134,21 @@ impl Scene {
         }
     }
 
-    /// [`Scene::nearest`]'s shapes, every one's bounds tested.
-    fn nearest_each(&self, ray: &Ray, spread: f32, leaving: Option<usize>, nearest: &mut Nearest) {
+    /// [`Scene::nearest`]'s shapes `shapes` (increasing indices, at most `count` of them), every
+    /// one's bounds tested.
+    fn nearest_each(
+        &self,
+        ray: &Ray,
+        spread: f32,
+        shapes: impl Iterator<Item = usize>,
+        count: usize,
+        nearest: &mut Nearest,
+    ) {
         let t_max = nearest.t;
-        let intervals = (self.shapes.iter().enumerate())
-            .filter(|&(i, _)| Some(i) != leaving)
-            .filter_map(|(i, shape)| {
-                let (t0, t1) = self.trace_interval(shape, ray, t_max)?;
-                Some((t0, t1, i))
-            });
+        let intervals = shapes.filter_map(|i| {
+            let (t0, t1) = self.trace_interval(&self.shapes[i], ray, t_max)?;
+            Some((t0, t1, i))
+        });
         let mut trace = |sorted: &[(f32, f32, usize)]| {
             for &(t0, t1, i) in sorted {
                 if t0 < nearest.t {
@@ -118,7 +156,7 @@ impl Scene {
                 }
             }
         };
-        if self.shapes.len() <= MAX_SORTED_SHAPES {
+        if count <= MAX_SORTED_SHAPES {
             // Insertion sort on the stack: stable, so ties keep the index order.
             let mut sorted = [(0.0f32, 0.0f32, 0usize); MAX_SORTED_SHAPES];
             let mut count = 0;

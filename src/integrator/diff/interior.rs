@@ -45,6 +45,7 @@ use crate::integrator::primal::trace_sample;
 use crate::math::Vec3;
 use crate::scalar::{Directions, Scalar, finite_directions};
 use crate::scene::Scene;
+use crate::scene::frustum::PixelShapes;
 
 /// The image and the interior term of the derivative with respect to the parameters in slots
 /// `0..count`, with a chosen scalar type `S`, in passes of `S::COUNT` parameters (each pass traces the
@@ -113,16 +114,27 @@ where
                 ..PathRecord::default()
             };
             let mut counters = TraceCounters::default();
+            let mut pixel_shapes = PixelShapes::default();
             for x in 0..w {
                 let pixel = (y * w + x) as usize;
                 if !tile.needs_pixel(pixel) {
                     continue;
                 }
+                let shapes = pixel_shapes.gather(scene, &frame32, x, y, spp);
                 let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 for s in 0..spp {
                     tile.begin_sample();
-                    let (offset, ray) =
-                        trace_sample(scene, &frame32, seed, x, y, s, &mut record, &mut counters);
+                    let (offset, ray) = trace_sample(
+                        scene,
+                        &frame32,
+                        seed,
+                        x,
+                        y,
+                        s,
+                        shapes,
+                        &mut record,
+                        &mut counters,
+                    );
                     let (mut l, first) = contribution_parts::<S, _>(scene, &record, &attach);
                     let primal = l.primal();
                     if !primal.is_finite() {
