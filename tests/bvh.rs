@@ -367,8 +367,9 @@ fn a_scene_of_many_balls_renders_the_same_image_and_derivative_with_the_hierarch
     let with = balls(300);
     assert!(with.bvh.len() == with.shapes.len());
     let without = brute(&with);
+    // Enough samples per pixel that the camera rays trace their pixel's gathered shapes.
     let options = RenderOptions {
-        spp: 4,
+        spp: 8,
         seed: 3,
         progress: Default::default(),
     };

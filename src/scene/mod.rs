@@ -459,20 +459,6 @@ impl Scene {
         self.nearest(ray, t_max, spread, None)
     }
 
-    /// [`Scene::intersect_resolving`] for a ray that can meet no shape but `shapes` (increasing
-    /// indices), e.g. a camera ray with its pixel's shapes ([`frustum::PixelShapes`]): the same
-    /// intersection, bit for bit, when every other shape's interval along the ray is empty.
-    #[inline]
-    pub fn intersect_among(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        spread: f32,
-        shapes: &[u32],
-    ) -> Intersection {
-        self.nearest_among(ray, t_max, spread, shapes)
-    }
-
     /// [`Scene::intersect`] for a ray leaving the surface of shape `leaving` ([`Scene::leaving`]), which
     /// is then not traced.
     #[inline]

@@ -74,10 +74,10 @@ impl Scene {
         self.nearest_hit(ray, nearest)
     }
 
-    /// [`Scene::nearest`] for a camera ray (no shape left) that can meet no shape but `shapes` (in
-    /// increasing index order) and the emitters: the same result, bit for bit, when every other
-    /// shape's interval along the ray is empty ([`super::frustum`]).
-    pub(super) fn nearest_among(
+    /// [`Scene::intersect_resolving`] for a ray that can meet no shape but `shapes` (increasing
+    /// indices), e.g. a camera ray with its pixel's shapes ([`super::frustum::PixelShapes`]): the
+    /// same intersection, bit for bit, when every other shape's interval along the ray is empty.
+    pub fn intersect_among(
         &self,
         ray: &Ray,
         t_max: f32,
