@@ -9,8 +9,10 @@
 //! [`super::Scene::intersect_resolving`]'s walk would trace them, so its hit is the same, bit for bit.
 //!
 //! The culling must never drop a shape a ray's own test would keep. A ray tests a shape's box grown by
-//! the local tolerance where it enters it ([`super::Scene::trace_interval`]), at most the tolerance at
-//! the box's farthest point from the eye; the pyramid test grows each box by twice that, plus 64 ulps
+//! the local tolerance where it enters it ([`super::Scene::trace_interval`]; for a ray passing beside
+//! the box, where it first leaves one of the box's slabs: at most √3 times as far as the box's
+//! farthest point from the eye). The tolerance grows at most linearly with the distance, so twice
+//! the tolerance at the farthest point bounds it; the pyramid test grows each box by that, plus 64 ulps
 //! of the coordinates' magnitude there, which exceeds the rounding of the rays' directions (they may
 //! leave the exact pyramid by a few ulps of their length: more than a pixel at a tiny field of view),
 //! of the rays' box tests and of the plane test itself. A node's box holds its shapes' boxes and its
