@@ -25,9 +25,9 @@ use crate::camera::CameraFrame;
 use crate::math::Aabb;
 use glam::{Vec3, Vec4};
 
-/// Samples per pixel from which the pixel's shapes are gathered first: gathering them costs about
-/// half a camera ray's walk of the hierarchy, and saves about a fifth of each (at 1,000 balls: even at
-/// 4 samples, 10–20% of the camera rays' time at 16).
+/// Samples per pixel from which the pixel's shapes are gathered first: below, gathering them costs
+/// more than the camera rays save (at 1,000 balls, `examples/camera_culling`: even at about 8 samples,
+/// 10–30% of the camera rays' time at 16).
 pub const MIN_SAMPLES: u32 = 8;
 
 /// Pixels of a row whose shapes one walk of the hierarchy gathers.
