@@ -12,7 +12,7 @@ use implicit_psdr::scene::{Intersection, Scene, load};
 use std::path::Path;
 use std::time::Instant;
 
-/// Traces the camera ray of every sample of every pixel with `trace`, after `gather` for its pixel;
+/// Traces the camera ray of every sample of every pixel with `trace` (given the pixel and the ray);
 /// returns the seconds taken and the sum of the hits' distances.
 fn camera_rays(
     scene: &Scene,

@@ -26,8 +26,8 @@ use crate::math::Aabb;
 use glam::{Vec3, Vec4};
 
 /// Samples per pixel from which the pixel's shapes are gathered first: below, gathering them costs
-/// more than the camera rays save (at 1,000 balls, `examples/camera_culling`: even at about 8 samples,
-/// 10–30% of the camera rays' time at 16).
+/// more than the camera rays save (at 1,000 balls, `examples/camera_culling`: about even at 8
+/// samples, 10–30% of the camera rays' time saved at 16).
 pub const MIN_SAMPLES: u32 = 8;
 
 /// Pixels of a row whose shapes one walk of the hierarchy gathers.
