@@ -8,6 +8,7 @@
 
 use implicit_psdr::camera::CameraFrame;
 use implicit_psdr::scene::frustum::PixelShapes;
+use implicit_psdr::scene::shape_list::ShapeList;
 use implicit_psdr::scene::{Intersection, Scene, load};
 use std::path::Path;
 use std::time::Instant;
@@ -55,7 +56,7 @@ fn main() {
     };
     let frame = scene.camera.frame::<f32>();
     let mut gathered = PixelShapes::default();
-    let mut shapes = Vec::new();
+    let mut shapes = ShapeList::default();
     let mut pixel = None;
     println!("spp   walk s   gathered s   ratio   same hits");
     for spp in [1, 2, 4, 8, 16] {
@@ -69,8 +70,7 @@ fn main() {
                     eprintln!("error: the scene has no hierarchy (five shapes or more needed)");
                     std::process::exit(1);
                 };
-                shapes.clear();
-                shapes.extend_from_slice(found);
+                shapes.clone_from(found);
                 pixel = Some((x, y));
             }
             scene.intersect_among(ray, f32::INFINITY, frame.spread(ray.d), &shapes)

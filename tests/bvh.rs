@@ -268,10 +268,11 @@ fn pixel_shapes_hold_what_camera_rays_meet(scene: &Scene, what: &str) -> usize {
     const GRID: usize = 5;
     for y in 0..scene.camera.height {
         for x in 0..scene.camera.width {
-            let shapes = gathered
+            let list = gathered
                 .gather(scene, &frame, x, y, 16)
                 .unwrap_or_else(|| panic!("{what}: no shapes gathered at ({x}, {y})"))
-                .to_vec();
+                .clone();
+            let shapes = list.indices();
             assert!(shapes.windows(2).all(|w| w[0] < w[1]), "{what}: order");
             for k in 0..GRID * GRID {
                 let u = |i: usize| (i as f32 / (GRID - 1) as f32).min(1.0 - f32::EPSILON);
@@ -288,7 +289,7 @@ fn pixel_shapes_hold_what_camera_rays_meet(scene: &Scene, what: &str) -> usize {
                     }
                 }
                 let spread = frame.spread(ray.d);
-                let among = scene.intersect_among(&ray, f32::INFINITY, spread, &shapes);
+                let among = scene.intersect_among(&ray, f32::INFINITY, spread, &list);
                 let all = scene.intersect_resolving(&ray, f32::INFINITY, spread);
                 assert_eq!(among, all, "{what}: pixel ({x}, {y}) offset {offset}");
                 hits += matches!(all, Intersection::Hit(_)) as usize;

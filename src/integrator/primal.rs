@@ -12,6 +12,7 @@ use crate::math::Vec3;
 use crate::sampler::{Sampler, stratified_2d};
 use crate::scene::Scene;
 use crate::scene::frustum::PixelShapes;
+use crate::scene::shape_list::ShapeList;
 
 /// Stream of the [`Sampler`] used by camera paths.
 pub const CAMERA_STREAM: u64 = 0;
@@ -29,7 +30,7 @@ pub fn trace_sample(
     x: u32,
     y: u32,
     sample: u32,
-    shapes: Option<&[u32]>,
+    shapes: Option<&ShapeList>,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> (glam::Vec2, crate::math::Ray) {
@@ -68,7 +69,7 @@ pub fn sample_pixel(
     x: u32,
     y: u32,
     sample: u32,
-    shapes: Option<&[u32]>,
+    shapes: Option<&ShapeList>,
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> glam::Vec3 {

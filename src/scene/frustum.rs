@@ -21,6 +21,7 @@
 
 use super::Scene;
 use super::bvh::LEAF;
+use super::shape_list::{ShapeList, set_lanes};
 use crate::camera::CameraFrame;
 use crate::math::Aabb;
 use glam::{Vec3, Vec4};
@@ -182,12 +183,12 @@ pub struct PixelShapes {
     /// The run of pixels (row, first pixel) whose shapes `run` holds.
     key: Option<(u32, u32)>,
     /// The run's shapes in the hierarchy, in increasing index order.
-    run: Vec<u32>,
-    /// Their boxes four at a time, one per SIMD lane (`lo` and `hi` per axis; unused lanes empty).
-    run_boxes: Vec<[[Vec4; 3]; 2]>,
+    run: ShapeList,
     /// The pixel's: those of the run its own pyramid may meet, and the shapes kept apart, in
     /// increasing index order.
-    shapes: Vec<u32>,
+    shapes: ShapeList,
+    /// Scratch: shapes' indices, and the walk's stack.
+    indices: Vec<u32>,
     stack: Vec<u32>,
 }
 
@@ -202,7 +203,7 @@ impl PixelShapes {
         x: u32,
         y: u32,
         spp: u32,
-    ) -> Option<&[u32]> {
+    ) -> Option<&ShapeList> {
         if spp < MIN_SAMPLES {
             return None;
         }
@@ -212,39 +213,25 @@ impl PixelShapes {
         let first = x - x % SEGMENT;
         if self.key != Some((y, first)) {
             self.key = None;
-            self.run.clear();
+            self.indices.clear();
             let last = (first + SEGMENT - 1).min(scene.camera.width.max(1) - 1);
             let run = PixelFrustum::of_pixels(frame, radius, first, last, y)?;
-            scene.shapes_in_frustum(&run, &mut self.stack, &mut self.run);
-            self.run.sort_unstable();
-            self.run_boxes.clear();
-            for four in self.run.chunks(4) {
-                let (mut lo, mut hi) = ([Vec4::INFINITY; 3], [Vec4::NEG_INFINITY; 3]);
-                for (j, &i) in four.iter().enumerate() {
-                    let b = scene.shapes[i as usize].bounds;
-                    for (a, (lo, hi)) in lo.iter_mut().zip(&mut hi).enumerate() {
-                        lo[j] = b.min[a];
-                        hi[j] = b.max[a];
-                    }
-                }
-                self.run_boxes.push([lo, hi]);
-            }
+            scene.shapes_in_frustum(&run, &mut self.stack, &mut self.indices);
+            self.indices.sort_unstable();
+            self.run.set(scene, self.indices.iter().copied());
             self.key = Some((y, first));
         }
         let pixel = PixelFrustum::of_pixels(frame, radius, x, x, y)?;
-        self.shapes.clear();
-        for (four, [lo, hi]) in self.run.chunks(4).zip(&self.run_boxes) {
-            let mut lanes = pixel.may_meet_lanes(*lo, *hi, eps);
-            while lanes != 0 {
-                let j = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                self.shapes.push(four[j]);
-            }
+        self.indices.clear();
+        for (four, [lo, hi]) in self.run.fours() {
+            let lanes = pixel.may_meet_lanes(*lo, *hi, eps);
+            self.indices.extend(set_lanes(lanes).map(|j| four[j]));
         }
         if !bvh.apart.is_empty() {
-            self.shapes.extend_from_slice(&bvh.apart);
-            self.shapes.sort_unstable();
+            self.indices.extend_from_slice(&bvh.apart);
+            self.indices.sort_unstable();
         }
+        self.shapes.set(scene, self.indices.iter().copied());
         Some(&self.shapes)
     }
 }

@@ -12,6 +12,7 @@ mod query;
 mod reach;
 mod selection;
 pub mod settings;
+pub mod shape_list;
 
 pub(crate) use blocks::visit_scene_selections_mut;
 pub use blocks::{BlockKind, GridBlock, GridDirection, ParamBlock, ParameterEntry};

@@ -2,6 +2,7 @@
 //! through the scene's [`Bvh`] or, for few shapes, shape by shape.
 
 use super::bvh::{Entry, LEAF, Queue, RaySlabs, SHAPE};
+use super::shape_list::ShapeList;
 use super::{Bvh, Hit, Intersection, Scene, Surface};
 use crate::math::Ray;
 use crate::trace::{ShapeTrace, TraceSettings};
@@ -67,26 +68,33 @@ impl Scene {
         match self.hierarchy() {
             Some(bvh) => self.nearest_in(bvh, ray, spread, leaving, &mut nearest),
             None => {
-                let shapes = (0..self.shapes.len()).filter(|&i| Some(i) != leaving);
-                self.nearest_each(ray, spread, shapes, self.shapes.len(), &mut nearest);
+                let t_max = nearest.t;
+                let intervals = (self.shapes.iter().enumerate())
+                    .filter(|&(i, _)| Some(i) != leaving)
+                    .filter_map(|(i, shape)| {
+                        let (t0, t1) = self.trace_interval(shape, ray, t_max)?;
+                        Some((t0, t1, i))
+                    });
+                self.nearest_each(ray, spread, intervals, self.shapes.len(), &mut nearest);
             }
         }
         self.nearest_hit(ray, nearest)
     }
 
-    /// [`Scene::intersect_resolving`] for a ray that can meet no shape but `shapes` (increasing
-    /// indices), e.g. a camera ray with its pixel's shapes ([`super::frustum::PixelShapes`]): the
-    /// same intersection, bit for bit, when every other shape's interval along the ray is empty.
+    /// [`Scene::intersect_resolving`] for a ray that can meet no shape but `shapes`, e.g. a camera
+    /// ray with its pixel's shapes ([`super::frustum::PixelShapes`]): the same intersection, bit for
+    /// bit, when every other shape's interval along the ray is empty. The list's boxes are tested
+    /// four at a time first ([`ShapeList`]).
     pub fn intersect_among(
         &self,
         ray: &Ray,
         t_max: f32,
         spread: f32,
-        shapes: &[u32],
+        shapes: &ShapeList,
     ) -> Intersection {
         let mut nearest = self.nearest_emitter(ray, t_max);
-        let each = shapes.iter().map(|&i| i as usize);
-        self.nearest_each(ray, spread, each, shapes.len(), &mut nearest);
+        let intervals = shapes.intervals(self, ray, nearest.t);
+        self.nearest_each(ray, spread, intervals, shapes.len(), &mut nearest);
         self.nearest_hit(ray, nearest)
     }
 
@@ -134,21 +142,17 @@ impl Scene {
         }
     }
 
-    /// [`Scene::nearest`]'s shapes `shapes` (increasing indices, at most `count` of them), every
-    /// one's bounds tested.
+    /// [`Scene::nearest`]'s shapes, given as their non-empty intervals `(t0, t1, index)` along the
+    /// ray up to the nearest emitter hit ([`Scene::trace_interval`]; increasing indices, drawn from
+    /// at most `count` shapes).
     fn nearest_each(
         &self,
         ray: &Ray,
         spread: f32,
-        shapes: impl Iterator<Item = usize>,
+        intervals: impl Iterator<Item = (f32, f32, usize)>,
         count: usize,
         nearest: &mut Nearest,
     ) {
-        let t_max = nearest.t;
-        let intervals = shapes.filter_map(|i| {
-            let (t0, t1) = self.trace_interval(&self.shapes[i], ray, t_max)?;
-            Some((t0, t1, i))
-        });
         let mut trace = |sorted: &[(f32, f32, usize)]| {
             for &(t0, t1, i) in sorted {
                 if t0 < nearest.t {
