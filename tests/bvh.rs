@@ -228,6 +228,60 @@ fn compare(scene: &Scene, rays: usize, seed: u64) -> Met {
     met
 }
 
+/// Shadow rays in runs from one small patch towards one small light, as a pixel's samples cast them,
+/// each told which shape blocked the one before ([`Scene::shapes_block_after`]): every answer is the
+/// walk's own. Returns how many rays a blocker known from the ray before blocked too.
+fn shadow_runs_get_the_walks_answers(scene: &Scene, seed: u64) -> usize {
+    let mut rng = SplitMix(seed);
+    let mut exhausted = 0;
+    let mut blocker = None;
+    let mut repeated = 0;
+    for run in 0..300 {
+        let patch = aim(scene, &mut rng) + rng.point(0.5);
+        let light = scene.camera.target.value() + rng.point(6.0) + Vec3::Y * 6.0;
+        for k in 0..12 {
+            let from = patch + rng.point(0.05);
+            let to = light + rng.point(0.3);
+            // Now and then the ray leaves a shape: the one that blocked the ray before.
+            let leaving = (k % 5 == 4)
+                .then_some(blocker)
+                .flatten()
+                .map(|i: u32| i as usize);
+            let (ray, t_max) = if run % 7 == 6 {
+                (Ray::new(from, rng.direction()), f32::INFINITY)
+            } else {
+                (
+                    (Ray::new(from, (to - from).normalize())),
+                    (to - from).length(),
+                )
+            };
+            let before = blocker;
+            let walked = scene.shapes_block(&ray, t_max, leaving, &mut exhausted);
+            let after =
+                scene.shapes_block_after(&ray, t_max, leaving, &mut blocker, &mut exhausted);
+            assert_eq!(
+                after, walked,
+                "run {run} ray {k}: {ray:?} to {t_max}, blocker {before:?}"
+            );
+            repeated += (after && before.is_some() && before == blocker) as usize;
+        }
+    }
+    repeated
+}
+
+#[test]
+fn a_shadow_ray_told_the_last_blocker_gets_the_walks_answer() {
+    for (seed, n, plane) in [(11, 200, true), (12, 600, false), (13, 40, true)] {
+        let scene = random_scene(n, seed, Vec3::ZERO, plane);
+        let repeated = shadow_runs_get_the_walks_answers(&scene, seed);
+        // The known blocker often decides: the test sees the shortcut taken.
+        assert!(
+            repeated > 100,
+            "seed {seed}: {repeated} rays blocked by the blocker before"
+        );
+    }
+}
+
 #[test]
 fn nearest_hits_and_occlusion_match_testing_every_shape() {
     for (seed, n, plane) in [(1, 40, true), (2, 200, false), (3, 600, true), (4, 7, true)] {

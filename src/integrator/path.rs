@@ -151,17 +151,24 @@ pub struct PathRecord {
     pub strategy: LightStrategy,
 }
 
-/// Counters kept while tracing.
+/// Counters kept while tracing, and what one shadow ray tells the next.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub struct TraceCounters {
     /// Rays (camera, shadow or continuation) whose sphere tracing ran out of steps.
     pub exhausted: u64,
+    /// The shape that blocked the last shadow ray that walked the scene, if one did: the next shadow
+    /// ray tests it first, since shadow rays from nearby points to one light tend to meet the same
+    /// occluder ([`occluded`]).
+    pub blocker: Option<u32>,
 }
 
 /// Whether anything blocks the segment `ray.o + t ray.d`, `t ∈ (0, t_max)`. The emitter `skip` (the one
 /// being connected to) is not tested: its own sampled point faces the reference, so it cannot occlude it.
 /// Nor is the shape `leaving` that the ray leaves ([`Scene::leaving`]). Exhausted traces count as
 /// unoccluded (as misses, like [`Scene::intersect`]).
+///
+/// The shape that blocked the previous shadow ray ([`TraceCounters::blocker`]) is tested first
+/// ([`Scene::shapes_block_after`]).
 pub fn occluded(
     scene: &Scene,
     ray: &Ray,
@@ -175,7 +182,13 @@ pub fn occluded(
             return true;
         }
     }
-    scene.shapes_block(ray, t_max, leaving, &mut counters.exhausted)
+    scene.shapes_block_after(
+        ray,
+        t_max,
+        leaving,
+        &mut counters.blocker,
+        &mut counters.exhausted,
+    )
 }
 
 /// What a ray sees, when only emission along it matters (the last segment of a path).

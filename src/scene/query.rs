@@ -318,38 +318,88 @@ impl Scene {
         leaving: Option<usize>,
         exhausted: &mut u64,
     ) -> bool {
-        let blocks = |i: usize, exhausted: &mut u64| {
-            if Some(i) == leaving {
-                return false;
-            }
-            let shape = &self.shapes[i];
-            let Some((t0, t1)) = self.trace_interval(shape, ray, t_max) else {
-                return false;
-            };
-            match shape.trace(ray, t0, t1, &self.shape_trace(shape)) {
-                ShapeTrace::Hit(t) => t < t_max,
-                ShapeTrace::Exhausted(_) => {
-                    *exhausted += 1;
-                    false
-                }
-                ShapeTrace::Miss => false,
-            }
-        };
-        let Some(bvh) = self.hierarchy() else {
-            return (0..self.shapes.len()).any(|i| blocks(i, exhausted));
-        };
-        if bvh.apart.iter().any(|&i| blocks(i as usize, exhausted)) {
+        self.shape_blocking(ray, t_max, leaving, exhausted)
+            .is_some()
+    }
+
+    /// [`Scene::shapes_block`] for a ray that follows one that `blocker` blocked (`None`: nothing did,
+    /// or no ray came before), which is tested first: shadow rays from nearby points to one light
+    /// tend to meet the same occluder, and when it blocks this ray too the answer is the same
+    /// without walking the hierarchy (any one blocker decides it). Sets `blocker` to this ray's,
+    /// when it walked. Only the count of exhausted traces can differ from [`Scene::shapes_block`]'s
+    /// (the walk counts those it meets before a blocker); it is the same on every run as long as the
+    /// caller's sequence of rays is. Without a hierarchy (a few shapes), the walk itself.
+    pub fn shapes_block_after(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaving: Option<usize>,
+        blocker: &mut Option<u32>,
+        exhausted: &mut u64,
+    ) -> bool {
+        if self.hierarchy().is_none() {
+            return self.shapes_block(ray, t_max, leaving, exhausted);
+        }
+        if let Some(i) = *blocker
+            && self.shape_blocks(i as usize, ray, t_max, leaving, &mut 0)
+        {
             return true;
         }
-        let Some(root) = bvh.nodes.first() else {
+        let found = self.shape_blocking(ray, t_max, leaving, exhausted);
+        *blocker = found.map(|i| i as u32);
+        found.is_some()
+    }
+
+    /// Whether shape `i`, when it is not `leaving`, crosses `ray` in `(0, t_max)`, as
+    /// [`Scene::shapes_block`] tests it (a trace that runs out of steps adds to `exhausted`).
+    #[inline]
+    fn shape_blocks(
+        &self,
+        i: usize,
+        ray: &Ray,
+        t_max: f32,
+        leaving: Option<usize>,
+        exhausted: &mut u64,
+    ) -> bool {
+        if Some(i) == leaving {
+            return false;
+        }
+        let shape = &self.shapes[i];
+        let Some((t0, t1)) = self.trace_interval(shape, ray, t_max) else {
             return false;
         };
+        match shape.trace(ray, t0, t1, &self.shape_trace(shape)) {
+            ShapeTrace::Hit(t) => t < t_max,
+            ShapeTrace::Exhausted(_) => {
+                *exhausted += 1;
+                false
+            }
+            ShapeTrace::Miss => false,
+        }
+    }
+
+    /// [`Scene::shapes_block`], saying which shape blocks the ray: the first one found (nearer
+    /// boxes first), or `None`.
+    fn shape_blocking(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        leaving: Option<usize>,
+        exhausted: &mut u64,
+    ) -> Option<usize> {
+        let blocks =
+            |i: usize, exhausted: &mut u64| self.shape_blocks(i, ray, t_max, leaving, exhausted);
+        let Some(bvh) = self.hierarchy() else {
+            return (0..self.shapes.len()).find(|&i| blocks(i, exhausted));
+        };
+        if let Some(&i) = bvh.apart.iter().find(|&&i| blocks(i as usize, exhausted)) {
+            return Some(i as usize);
+        }
+        let root = bvh.nodes.first()?;
         let origin = ray.o.abs().max_element();
         let margin = |entry: f32| self.trace.eps_at(origin + entry);
         let slabs = RaySlabs::new(ray, &root.bounds, 0.0, margin);
-        if slabs.node_interval(&root.bounds, 0.0, t_max).is_none() {
-            return false;
-        }
+        slabs.node_interval(&root.bounds, 0.0, t_max)?;
         // Depth first, nearer children first: an occluder near the start ends the walk early.
         let mut stack = [0u32; STACK];
         let mut spill = Vec::new();
@@ -361,16 +411,16 @@ impl Scene {
                 top -= 1;
                 stack[top]
             } else {
-                return false;
+                return None;
             };
             if k & LEAF != 0 {
                 let node = bvh.nodes[(k & !LEAF) as usize];
                 let range = node.first as usize..(node.first + node.count) as usize;
-                if bvh.order[range]
+                if let Some(&i) = bvh.order[range]
                     .iter()
-                    .any(|&i| blocks(i as usize, exhausted))
+                    .find(|&&i| blocks(i as usize, exhausted))
                 {
-                    return true;
+                    return Some(i as usize);
                 }
                 continue;
             }
