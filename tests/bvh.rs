@@ -251,7 +251,7 @@ fn shadow_runs_get_the_walks_answers(scene: &Scene, seed: u64) -> usize {
                 (Ray::new(from, rng.direction()), f32::INFINITY)
             } else {
                 (
-                    (Ray::new(from, (to - from).normalize())),
+                    Ray::new(from, (to - from).normalize()),
                     (to - from).length(),
                 )
             };

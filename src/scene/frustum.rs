@@ -155,10 +155,7 @@ impl Scene {
         stack.push(0);
         while let Some(k) = stack.pop() {
             let node = &bvh.wide[k as usize];
-            let mut lanes = node.lanes & frustum.may_meet_lanes(node.lo, node.hi, eps);
-            while lanes != 0 {
-                let j = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
+            for j in set_lanes(node.lanes & frustum.may_meet_lanes(node.lo, node.hi, eps)) {
                 let child = node.child[j];
                 if child & LEAF == 0 {
                     stack.push(child);

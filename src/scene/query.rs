@@ -2,7 +2,7 @@
 //! through the scene's [`Bvh`] or, for few shapes, shape by shape.
 
 use super::bvh::{Entry, LEAF, Queue, RaySlabs, SHAPE};
-use super::shape_list::ShapeList;
+use super::shape_list::{ShapeList, set_lanes};
 use super::{Bvh, Hit, Intersection, Scene, Surface};
 use crate::math::Ray;
 use crate::trace::{ShapeTrace, TraceSettings};
@@ -250,12 +250,10 @@ impl Scene {
                     continue;
                 }
                 let node = &bvh.wide[e.tag as usize];
-                let (mut lanes, t0, t1) = slabs.wide_interval(node, 0.0, nearest.t);
+                let (lanes, t0, t1) = slabs.wide_interval(node, 0.0, nearest.t);
                 // The first child goes on at once when it would be popped next anyway.
                 let mut first: Option<Entry> = None;
-                while lanes != 0 {
-                    let j = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
+                for j in set_lanes(lanes) {
                     let child = Entry {
                         t0: t0[j],
                         t1: t1[j],
@@ -425,13 +423,11 @@ impl Scene {
                 continue;
             }
             let node = &bvh.wide[k as usize];
-            let (mut lanes, t0, _) = slabs.wide_interval(node, 0.0, t_max);
+            let (lanes, t0, _) = slabs.wide_interval(node, 0.0, t_max);
             // The kept children, farthest first (pushed first, popped last).
             let mut kept = [(0.0f32, 0u32); 4];
             let mut n = 0;
-            while lanes != 0 {
-                let j = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
+            for j in set_lanes(lanes) {
                 let mut m = n;
                 while m > 0 && kept[m - 1].0 < t0[j] {
                     kept[m] = kept[m - 1];
