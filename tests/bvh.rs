@@ -271,8 +271,14 @@ fn shadow_runs_get_the_walks_answers(scene: &Scene, seed: u64) -> usize {
 
 #[test]
 fn a_shadow_ray_told_the_last_blocker_gets_the_walks_answer() {
-    for (seed, n, plane) in [(11, 200, true), (12, 600, false), (13, 40, true)] {
-        let scene = random_scene(n, seed, Vec3::ZERO, plane);
+    let far = Vec3::new(1e5, -3e4, 2e4);
+    for (seed, n, offset, plane) in [
+        (11, 200, Vec3::ZERO, true),
+        (12, 600, Vec3::ZERO, false),
+        (13, 40, Vec3::ZERO, true),
+        (14, 200, far, true),
+    ] {
+        let scene = random_scene(n, seed, offset, plane);
         let repeated = shadow_runs_get_the_walks_answers(&scene, seed);
         // The known blocker often decides: the test sees the shortcut taken.
         assert!(
