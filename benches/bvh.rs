@@ -4,9 +4,9 @@
 //! one run; then `diff` (the complete derivative of `ball0.radius`, default boundary budgets) against
 //! `render` at 1,000 balls.
 //!
-//! Then the same 1,000 balls as the children of ONE union shape (the union's own hierarchy over its
-//! children, against evaluating every child at every step, that at 1 spp) beside the 1,000 separate
-//! shapes and one ball.
+//! Then the same 1,000 balls as the children of ONE union shape, hard and smooth (blend 0.1: a ball's
+//! radius), with the union's own hierarchy over its children and evaluating every child at every step
+//! (that at 1 spp), beside the 1,000 separate shapes and one ball.
 //!
 //! Then Mitsuba 3 on the same scenes at 1 and 1,000 balls, when its Python package imports
 //! (`benches/mitsuba_balls.py` through `$MITSUBA_PYTHON`, else `python3`; Dr.Jit's LLVM backend may
@@ -27,17 +27,22 @@ fn scene(n: usize) -> Scene {
     parse(&many_balls::many_balls(n, 1), Path::new(".")).expect("the generated scene parses")
 }
 
-/// The scene of `n` balls with the balls made the children of one union shape named `balls`.
-fn union_scene(n: usize, culled: bool) -> Scene {
+/// The scene of `n` balls with the balls made the children of one union shape named `balls` (a smooth
+/// union with blend `k` when given).
+fn union_scene(n: usize, culled: bool, k: Option<f64>) -> Scene {
     let mut doc: serde_json::Value =
         serde_json::from_str(&many_balls::many_balls(n, 1)).expect("the generated scene is JSON");
     let shapes = doc["shapes"].as_array_mut().expect("shapes");
     let children: Vec<serde_json::Value> = shapes.drain(..n).map(|s| s["sdf"].clone()).collect();
+    let sdf = match k {
+        Some(k) => serde_json::json!({"type": "smooth_union", "k": k, "children": children}),
+        None => serde_json::json!({"type": "union", "children": children}),
+    };
     shapes.insert(
         0,
         serde_json::json!({
             "name": "balls",
-            "sdf": {"type": "union", "children": children},
+            "sdf": sdf,
             "bsdf": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
         }),
     );
@@ -176,24 +181,28 @@ fn main() {
     };
     let r_one = rate(&scene(1), &options, reps);
     let r_shapes = rate(&scene(1000), &options, reps);
-    let r_union = rate(&union_scene(1000, true), &options, reps);
     let one_spp = RenderOptions {
         spp: 1,
         ..options.clone()
     };
-    let r_plain = rate(&union_scene(1000, false), &one_spp, 1);
     println!("1000 balls as one union shape (M samples/s, and / 1 ball):");
-    println!("  1 ball               {r_one:8.3}   1.00");
+    println!("  1 ball                             {r_one:8.3}   1.00");
     println!(
-        "  1000 shapes          {r_shapes:8.3}   {:.2}",
+        "  1000 shapes                        {r_shapes:8.3}   {:.2}",
         r_shapes / r_one
     );
-    println!(
-        "  union, culled        {r_union:8.3}   {:.2}",
-        r_union / r_one
-    );
-    println!(
-        "  union, every child   {r_plain:8.3}   {:.4}   (1 spp, one render)",
-        r_plain / r_one
-    );
+    for (name, k) in [("union", None), ("smooth union, k 0.1", Some(0.1))] {
+        let r_culled = rate(&union_scene(1000, true, k), &options, reps);
+        let r_plain = rate(&union_scene(1000, false, k), &one_spp, 1);
+        println!(
+            "  {:<34} {r_culled:8.3}   {:.3}",
+            format!("{name}, culled"),
+            r_culled / r_one
+        );
+        println!(
+            "  {:<34} {r_plain:8.3}   {:.4}   (1 spp, one render)",
+            format!("{name}, every child"),
+            r_plain / r_one
+        );
+    }
 }

@@ -2,7 +2,7 @@
 //! same values bit for bit, with the same gradients and Hessians, on many random points (inside, outside,
 //! far away, on and next to the children's surfaces) for unions, differences, intersections and smooth
 //! unions of balls, boxes, grids, transforms and nested CSG; and the same image and derivative image of a
-//! scene whose one shape is a union of 200 balls.
+//! scene whose one shape is a union of 200 balls, hard or smooth.
 
 mod common;
 
@@ -96,30 +96,41 @@ fn points(rng: &mut SplitMix, half: f32, leaves: &[Sdf], n: usize) -> Vec<Vec3> 
     out
 }
 
+/// The bits of `x`, every NaN the same: Rust leaves a NaN's sign and payload unspecified (the compiler may
+/// swap a product's operands, and x86 keeps the first NaN's).
+fn bits(x: f32) -> u32 {
+    if x.is_nan() {
+        f32::NAN.to_bits()
+    } else {
+        x.to_bits()
+    }
+}
+
 /// Values, gradients and Hessians of `sdf` and its brute-force copy agree bit for bit at every point.
 fn same_everywhere(sdf: &Sdf, pts: &[Vec3]) -> usize {
     let plain = brute(sdf);
-    assert_eq!(&plain, sdf);
+    // Compared as text: a NaN parameter is not equal to itself.
+    assert_eq!(format!("{plain:?}"), format!("{sdf:?}"));
     let mut inside = 0;
     for &p in pts {
         let (a, b) = (sdf.eval_f32(p), plain.eval_f32(p));
-        assert_eq!(a.to_bits(), b.to_bits(), "value at {p}: {a} vs {b}");
+        assert_eq!(bits(a), bits(b), "value at {p}: {a} vs {b}");
         inside += usize::from(a < 0.0);
         let (ga, gb) = (sdf.gradient(p), plain.gradient(p));
         assert_eq!(
-            ga.to_array().map(f32::to_bits),
-            gb.to_array().map(f32::to_bits),
+            ga.to_array().map(bits),
+            gb.to_array().map(bits),
             "gradient at {p}"
         );
         let (fa, fb) = (
             sdf.eval_faces::<f32>(p.into()),
             plain.eval_faces::<f32>(p.into()),
         );
-        assert_eq!(fa.to_bits(), fb.to_bits(), "face field at {p}");
+        assert_eq!(bits(fa), bits(fb), "face field at {p}");
         let (ha, hb) = (sdf.hessian(p), plain.hessian(p));
         assert_eq!(
-            ha.2.to_cols_array().map(f32::to_bits),
-            hb.2.to_cols_array().map(f32::to_bits),
+            ha.2.to_cols_array().map(bits),
+            hb.2.to_cols_array().map(bits),
             "Hessian at {p}"
         );
     }
@@ -141,6 +152,39 @@ fn unions_of_many_children_give_the_plain_values() {
         let inside = same_everywhere(&union, &pts);
         assert!(inside > 20, "{inside} points inside of {}", pts.len());
     }
+}
+
+#[test]
+fn smooth_unions_of_many_children_give_the_plain_values() {
+    let mut rng = SplitMix(5);
+    // Sparse and dense children, blends small and large against their spacing (the dense ones put more
+    // children within the blend of a point than the walk's heap holds), and no blend (the hard union).
+    for (n, half, k) in [
+        (9, 1.0, 0.1),
+        (40, 2.0, 0.3),
+        (300, 4.0, 0.05),
+        (300, 0.5, 0.6),
+        (150, 1.0, 2.0),
+        (100, 1e3, 1.0),
+        (50, 2.0, 0.0),
+        (50, 2.0, -1.0),
+    ] {
+        let kids = leaves(&mut rng, n, half);
+        let blend = Sdf::smooth_union(kids.clone(), k);
+        assert!(matches!(&blend, Sdf::SmoothUnion { children: c, .. } if c.is_culled()));
+        let pts = points(&mut rng, half, &kids, 200);
+        let inside = same_everywhere(&blend, &pts);
+        assert!(inside > 20, "{inside} points inside of {}", pts.len());
+    }
+    // Unbounded and NaN children: a plane first (no box), planes among the children (no box, never
+    // skipped), a child whose value is NaN.
+    let mut kids = leaves(&mut rng, 30, 2.0);
+    kids.insert(0, Sdf::plane(Vec3::Y, -1.5));
+    kids.insert(17, Sdf::plane(Vec3::new(0.6, 0.0, 0.8), 1.0));
+    kids.push(Sdf::sphere([0.0, f32::NAN, 0.0], 0.3));
+    kids.push(Sdf::plane(Vec3::X, 0.5));
+    let pts = points(&mut rng, 2.0, &kids[1..17], 100);
+    same_everywhere(&Sdf::smooth_union(kids, 0.2), &pts);
 }
 
 #[test]
@@ -222,8 +266,9 @@ fn parameters_set_in_place_and_refreshed_keep_the_values_right() {
     assert_eq!(union.eval_f32(p), 0.5);
 }
 
-/// `n` balls of radius 0.12 as one union shape named `balls` above a floor, under a rectangle light.
-fn ball_union(n: usize) -> Scene {
+/// `n` balls of radius 0.12 as one union shape named `balls` (smooth with blend `k` when given) above
+/// a floor, under a rectangle light.
+fn ball_union(n: usize, k: Option<f32>) -> Scene {
     let mut rng = SplitMix(9);
     let kids: Vec<Sdf> = (0..n)
         .map(|i| {
@@ -237,7 +282,14 @@ fn ball_union(n: usize) -> Scene {
         albedo: [0.6, 0.6, 0.6].into(),
     };
     let shapes = vec![
-        Shape::new("balls", Sdf::union(kids), diffuse()),
+        Shape::new(
+            "balls",
+            match k {
+                Some(k) => Sdf::smooth_union(kids, k),
+                None => Sdf::union(kids),
+            },
+            diffuse(),
+        ),
         Shape::new(
             "floor",
             Sdf::cuboid([0.0, -2.0, 0.0], [10.0, 0.5, 10.0], 0.25),
@@ -262,30 +314,40 @@ fn ball_union(n: usize) -> Scene {
 
 #[test]
 fn a_union_of_200_balls_renders_the_same_image_and_derivative_culled() {
-    let with = ball_union(200);
-    assert!(matches!(&with.shapes[0].sdf, Sdf::Union(c) if c.is_culled()));
-    let mut without = with.clone();
-    without.shapes[0].sdf = brute(&with.shapes[0].sdf);
-    let options = RenderOptions {
-        spp: 4,
-        seed: 3,
-        progress: Default::default(),
-    };
-    let (a, _) = render(&with, &options);
-    let (b, _) = render(&without, &options);
-    assert_eq!(a.rgb, b.rgb, "images differ");
-    assert!(a.rgb.iter().any(|&v| v > 0.0));
-    // Selecting parameters refreshes the scene: the hierarchy is rebuilt, the derivatives the same.
-    let names = ["b0.radius", "b7.center.x"];
-    let selection = with.select(&names).unwrap();
-    let diff = DiffOptions {
-        render: options.clone(),
-        ..DiffOptions::default()
-    };
-    let da = render_derivatives(&with, &selection, &diff).unwrap();
-    let db = render_derivatives(&without, &without.select(&names).unwrap(), &diff).unwrap();
-    assert_eq!(da.image.rgb, db.image.rgb);
-    for (x, y) in da.total().iter().zip(db.total()) {
-        assert_eq!(x.rgb, y.rgb, "derivative images differ");
+    for k in [None, Some(0.1)] {
+        let with = ball_union(200, k);
+        assert!(matches!(&with.shapes[0].sdf,
+            Sdf::Union(c) | Sdf::SmoothUnion { children: c, .. } if c.is_culled()));
+        let mut without = with.clone();
+        without.shapes[0].sdf = brute(&with.shapes[0].sdf);
+        let options = RenderOptions {
+            spp: 4,
+            seed: 3,
+            progress: Default::default(),
+        };
+        let (a, _) = render(&with, &options);
+        let (b, _) = render(&without, &options);
+        assert_eq!(a.rgb, b.rgb, "images differ ({k:?})");
+        assert!(a.rgb.iter().any(|&v| v > 0.0));
+        // Selecting parameters refreshes the scene: the hierarchy is rebuilt, the derivatives the same.
+        let mut names = vec!["b0.radius", "b3.center.x"];
+        if k.is_some() {
+            names.push("balls.k");
+        }
+        let selection = with.select(&names).unwrap();
+        let diff = DiffOptions {
+            render: options.clone(),
+            ..DiffOptions::default()
+        };
+        let da = render_derivatives(&with, &selection, &diff).unwrap();
+        let db = render_derivatives(&without, &without.select(&names).unwrap(), &diff).unwrap();
+        assert_eq!(da.image.rgb, db.image.rgb);
+        for (x, y) in da.total().iter().zip(db.total()) {
+            assert_eq!(x.rgb, y.rgb, "derivative images differ ({k:?})");
+            assert!(
+                x.rgb.iter().any(|&v| v != 0.0),
+                "a zero derivative image ({k:?})"
+            );
+        }
     }
 }

@@ -327,7 +327,10 @@ impl Sdf {
                 None => csg::difference::<S, FACES>(children, p),
             },
             Sdf::SmoothUnion { children, k } => {
-                csg::smooth_union::<S, FACES>(children, k.get::<S>(), p)
+                match culling::hierarchy::<S>(children).filter(|_| !FACES) {
+                    Some(bvh) => culling::smooth_union::<S, FACES>(children, bvh, k.get::<S>(), p),
+                    None => csg::smooth_union::<S, FACES>(children, k.get::<S>(), p),
+                }
             }
             Sdf::Transform {
                 translate,

@@ -1,5 +1,6 @@
-//! Culling a CSG node's children: a small bounding volume hierarchy over the children of a hard union or
-//! a difference, so that evaluating the node at a point evaluates the children near it only.
+//! Culling a CSG node's children: a small bounding volume hierarchy over the children of a hard union, a
+//! smooth union or a difference, so that evaluating the node at a point evaluates the children near it
+//! only.
 //!
 //! # What may be skipped, exactly
 //!
@@ -26,16 +27,30 @@
 //! The field of the faces ([`Sdf::eval_faces`]) is never culled: a sharp primitive's face field is
 //! below its distance outside its edges, so its box bounds nothing there.
 //!
-//! Intersections and smooth unions are evaluated in full: a box bounds a field from below, never from
-//! above (a max needs the latter), and the folded smooth minimum depends on the order of its children in
-//! its last bits, so skipping one exactly needs more than the box test (see docs/performance.md).
+//! A smooth union folds the cubic smooth minimum left over its children, `d_i = smin(d_{i−1}, φ_i)`,
+//! which is not associative: its value depends on the children's order, so the culling must keep the
+//! fold's. With blend `k > 0`, `smin(d, φ)` is exactly `min(d, φ)` where `|φ − d| ≥ k`, and the running
+//! value only falls with `i`. So a child whose box bound lies `k` above the running value is skipped,
+//! and a child whose value lies `k` below it *resets* the fold (the running value becomes that child's
+//! value, whatever came before). The running value never lies more than `k` below the least child value
+//! so far, so a reset can be proved from the values of a point's near children and the box bounds of
+//! the others, without the far children's values ([`smooth`]). The result is the plain fold's, bit for
+//! bit.
+//!
+//! Intersections are evaluated in full: a box bounds a field from below, never from above (a maximum
+//! needs the latter).
 
 use super::Sdf;
 use crate::math::{Aabb, Vec3};
 use crate::scalar::Scalar;
 use std::sync::Arc;
 
-/// A hard union or a difference with more children than this gets a hierarchy over them.
+mod smooth;
+
+pub(super) use smooth::smooth_union;
+
+/// A hard union, a smooth union or a difference with more children than this gets a hierarchy over
+/// them.
 pub const CULL_MIN_CHILDREN: usize = 8;
 
 /// Leaves hold at most this many children.
@@ -146,6 +161,8 @@ struct Node {
     a: u32,
     b: u32,
     leaf: bool,
+    /// The smallest child index below the node: the order in which a smooth union visits it.
+    first: u32,
 }
 
 /// The hierarchy over children `1..` (the first is always evaluated first: it starts the fold).
@@ -153,7 +170,7 @@ pub(super) struct ChildBvh {
     nodes: Vec<Node>,
     /// Child indices, leaves' runs.
     order: Vec<u32>,
-    /// Each child's grown culling box, by child index (unused for index 0 and the always-evaluated).
+    /// Each child's grown culling box, by child index (infinite for those without one).
     boxes: Vec<(glam::Vec3, glam::Vec3)>,
     /// Children without a culling box (evaluated at every point), ascending.
     always: Vec<u32>,
@@ -178,18 +195,25 @@ fn lower(min: glam::Vec3, max: glam::Vec3, p: glam::Vec3) -> f32 {
 
 impl ChildBvh {
     fn build(children: &[Sdf]) -> Self {
-        let mut boxes = vec![(glam::Vec3::ZERO, glam::Vec3::ZERO); children.len()];
+        let mut boxes = Vec::with_capacity(children.len());
         let mut always = Vec::new();
         let mut order = Vec::new();
-        for (i, c) in children.iter().enumerate().skip(1) {
+        for (i, c) in children.iter().enumerate() {
             match c.cull_bounds() {
                 Some(b) if !b.is_empty() && b.is_finite() => {
-                    boxes[i] = grown(&b);
+                    boxes.push(grown(&b));
                     order.push(i as u32);
                 }
-                _ => always.push(i as u32),
+                _ => {
+                    // An infinite box bounds nothing: the smooth union never skips it.
+                    boxes.push((glam::Vec3::NEG_INFINITY, glam::Vec3::INFINITY));
+                    always.push(i as u32)
+                }
             }
         }
+        // The first child starts every fold: it is in no list.
+        order.retain(|&i| i != 0);
+        always.retain(|&i| i != 0);
         let mut bvh = ChildBvh {
             nodes: Vec::new(),
             order: Vec::new(),
@@ -225,6 +249,7 @@ impl ChildBvh {
             a: start as u32,
             b: count as u32,
             leaf: true,
+            first: run.iter().copied().min().unwrap_or(u32::MAX),
         });
         if count <= LEAF_SIZE {
             return id;
@@ -244,35 +269,40 @@ impl ChildBvh {
         id
     }
 
-    /// Visits the children that may matter: `visit(i, bound)` is called for every always-evaluated
-    /// child, then for the children whose culling box's bound passes `keep(bound)` (asked again with
-    /// the latest state before each evaluation, so that it tightens as values come in).
+    /// Visits the children that may matter: `visit(i, bound)` (the child's box bound, `−∞` where none
+    /// is known) is called for every always-evaluated child, then for the children whose bound passes
+    /// `keep(bound)` (asked again with the latest state before each evaluation, so that it tightens as
+    /// values come in).
     #[inline]
     fn visit(
         &self,
         p: glam::Vec3,
         mut keep: impl FnMut(f32) -> bool,
-        mut visit: impl FnMut(usize),
+        mut visit: impl FnMut(usize, f32),
     ) {
         for &i in &self.always {
-            visit(i as usize);
+            visit(i as usize, f32::NEG_INFINITY);
         }
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else {
             return;
-        }
-        let mut stack = [0u32; 64];
+        };
+        // Nodes with their box bounds, computed once, when the parent orders its two.
+        let mut stack = [(0u32, 0.0f32); 64];
+        stack[0].1 = lower(root.min, root.max, p);
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            if !keep(lower(node.min, node.max, p)) {
+            let (id, bound) = stack[top];
+            if !keep(bound) {
                 continue;
             }
+            let node = &self.nodes[id as usize];
             if node.leaf {
                 for &i in &self.order[node.a as usize..(node.a + node.b) as usize] {
                     let (a, b) = self.boxes[i as usize];
-                    if keep(lower(a, b, p)) {
-                        visit(i as usize);
+                    let bound = lower(a, b, p);
+                    if keep(bound) {
+                        visit(i as usize, bound);
                     }
                 }
             } else {
@@ -280,13 +310,13 @@ impl ChildBvh {
                 let (l, r) = (&self.nodes[node.a as usize], &self.nodes[node.b as usize]);
                 let (dl, dr) = (lower(l.min, l.max, p), lower(r.min, r.max, p));
                 let (near, far) = if dl <= dr {
-                    (node.a, node.b)
+                    ((node.a, dl), (node.b, dr))
                 } else {
-                    (node.b, node.a)
+                    ((node.b, dr), (node.a, dl))
                 };
                 if top + 2 > stack.len() {
                     // Deeper than any balanced tree of a CSG node: visit everything below instead.
-                    self.visit_all(stack[top], &mut visit);
+                    self.visit_all(id, &mut visit);
                     continue;
                 }
                 stack[top] = far;
@@ -296,11 +326,11 @@ impl ChildBvh {
         }
     }
 
-    fn visit_all(&self, node: u32, visit: &mut impl FnMut(usize)) {
+    fn visit_all(&self, node: u32, visit: &mut impl FnMut(usize, f32)) {
         let n = &self.nodes[node as usize];
         if n.leaf {
             for &i in &self.order[n.a as usize..(n.a + n.b) as usize] {
-                visit(i as usize);
+                visit(i as usize, f32::NEG_INFINITY);
             }
         } else {
             self.visit_all(n.a, visit);
@@ -358,7 +388,7 @@ fn culled_fold<S: Scalar, const FACES: bool, const SUBTRACT: bool>(
     bvh.visit(
         q,
         |bound| bound.partial_cmp(&best_key.get()) != Some(std::cmp::Ordering::Greater),
-        |i| {
+        |i, _| {
             let child = children[i].eval_as::<S, FACES>(p);
             let v = if SUBTRACT { -child } else { child };
             let (vk, bk) = (key(v.primal()), key(best.primal()));
