@@ -1,16 +1,18 @@
 //! Culling a CSG node's children (a hierarchy over their boxes) against evaluating every child: the
 //! same values bit for bit, with the same gradients and Hessians, on many random points (inside, outside,
 //! far away, on and next to the children's surfaces) for unions, differences, intersections and smooth
-//! unions of balls, boxes, grids, transforms and nested CSG; and the same image and derivative image of a
-//! scene whose one shape is a union of 200 balls, hard or smooth.
+//! unions of balls, boxes, grids, transforms and nested CSG; and the same image, derivative images and
+//! reverse-mode gradient of a scene whose one shape is a union of 200 balls, hard or smooth.
 
 mod common;
 
 use common::SplitMix;
 use glam::Vec3;
 use implicit_psdr::bsdf::Bsdf;
+use implicit_psdr::film::Image;
 use implicit_psdr::integrator::{
-    DiffOptions, IntegratorKind, RenderOptions, render, render_derivatives,
+    DiffOptions, GradientLayout, IntegratorKind, RenderOptions, render, render_derivatives,
+    render_gradient,
 };
 use implicit_psdr::scene::{Scene, Shape};
 use implicit_psdr::sdf::{GridData, Sdf};
@@ -349,5 +351,24 @@ fn a_union_of_200_balls_renders_the_same_image_and_derivative_culled() {
                 "a zero derivative image ({k:?})"
             );
         }
+        // Reverse mode (its own scalar type through the same culled evaluation): the same gradient.
+        let params: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        let mut adjoint = Image::new(a.width, a.height);
+        for (j, v) in adjoint.rgb.iter_mut().enumerate() {
+            *v = ((j * 7919) % 13) as f32 / 6.0 - 1.0;
+        }
+        let gradient = |scene: &Scene| {
+            let layout = GradientLayout::select(scene, &params, &[]).unwrap();
+            render_gradient(scene, &layout, &adjoint, &diff).unwrap()
+        };
+        let (ga, gb) = (gradient(&with), gradient(&without));
+        for (x, y) in [
+            (&ga.interior, &gb.interior),
+            (&ga.primary, &gb.primary),
+            (&ga.secondary, &gb.secondary),
+        ] {
+            assert_eq!(x, y, "reverse-mode gradients differ ({k:?})");
+        }
+        assert!(ga.interior.iter().all(|&v| v != 0.0 && v.is_finite()));
     }
 }
