@@ -21,9 +21,9 @@
 //! `k` below that bound, and `k` below `limit`, resets the fold; from there the gathered children are
 //! folded in order, and the others, at least `k` above the running value by then, are skipped. Where
 //! no reset is proved, the children before the first gathered one lying `k` below `limit` are folded
-//! in full order ([`ordered_fold`]) and the gathered ones from there on. The bounds carry margins for rounding: a few
-//! ulps between the `f32` and the generic evaluation, and the plain fold's own rounding, a few ulps per
-//! step over at most `n` blending steps spanning at most `n k`.
+//! in full order ([`ordered_fold`]) and the gathered ones from there on. The bounds carry margins for
+//! rounding: a few ulps between the `f32` and the generic evaluation, and the plain fold's own
+//! rounding, a few ulps per step over at most `n` blending steps spanning at most `n k`.
 
 use super::super::{Sdf, csg::smin};
 use super::{ChildBvh, culled_fold, lower, primal};
@@ -57,24 +57,29 @@ pub(in crate::sdf) fn smooth_union<S: Scalar, const FACES: bool>(
     let Some((near, start)) = NearChildren::gather::<FACES>(children, bvh, kp, q) else {
         return ordered_fold::<S, FACES>(children, bvh, k, p, children.len());
     };
-    let indices = &near.index[..near.len];
-    let (mut d, rest) = match start {
-        Start::Reset(j) => (
-            children[indices[j] as usize].eval_as::<S, FACES>(p),
-            &indices[j + 1..],
-        ),
+    let (indices, bounds) = (&near.index[..near.len], &near.bound[..near.len]);
+    let (mut d, from) = match start {
+        Start::Reset(j) => (children[indices[j] as usize].eval_as::<S, FACES>(p), j + 1),
         Start::Low(j) => (
             ordered_fold::<S, FACES>(children, bvh, k, p, indices[j] as usize),
-            &indices[j..],
+            j,
         ),
     };
-    for &i in rest {
-        let (a, b) = bvh.boxes[i as usize];
-        if !unchanged(lower(a, b, q), d.primal(), kp) {
-            d = smin(d, children[i as usize].eval_as::<S, FACES>(p), k);
-        }
+    for (&i, &bound) in indices[from..].iter().zip(&bounds[from..]) {
+        d = fold_child::<S, FACES>(d, &children[i as usize], bound, k, p);
     }
     d
+}
+
+/// The running value `d` with `child` (whose box bound at the point is `bound`) folded in, or `d`
+/// itself where the bound proves the child leaves it unchanged.
+#[inline(always)]
+fn fold_child<S: Scalar, const FACES: bool>(d: S, child: &Sdf, bound: f32, k: S, p: Vec3<S>) -> S {
+    if unchanged(bound, d.primal(), k.primal()) {
+        d
+    } else {
+        smin(d, child.eval_as::<S, FACES>(p), k)
+    }
 }
 
 /// Whether `smin(d, φ)` is provably `d` for every `φ ≥ bound`: `bound > d + k (1 + 1e-5) + 1e-5 |d|`
@@ -103,6 +108,8 @@ const NEAR_MAX: usize = 128;
 /// `limit`.
 struct NearChildren {
     index: [u32; NEAR_MAX],
+    /// The child's box bound at the point (`−∞` where it has none).
+    bound: [f32; NEAR_MAX],
     /// The child's value in `f32` where the gathering computed it, else NaN.
     value: [f32; NEAR_MAX],
     len: usize,
@@ -121,6 +128,7 @@ impl NearChildren {
         let eval = |i: usize| children[i].eval_as::<f32, FACES>(q.into());
         let mut near = NearChildren {
             index: [0; NEAR_MAX],
+            bound: [0.0; NEAR_MAX],
             value: [f32::NAN; NEAR_MAX],
             len: 0,
         };
@@ -128,7 +136,8 @@ impl NearChildren {
         if first.is_nan() {
             return None;
         }
-        near.push(0, first);
+        let (a, b) = bvh.boxes[0];
+        near.push(0, lower(a, b, q), first);
         let reach = 3.5 * k;
         let best = std::cell::Cell::new(first);
         let mut fits = true;
@@ -144,7 +153,7 @@ impl NearChildren {
                 } else {
                     f32::NAN
                 };
-                fits &= near.push(i as u32, value);
+                fits &= near.push(i as u32, bound, value);
             },
         );
         let limit = best.get() + reach;
@@ -154,9 +163,8 @@ impl NearChildren {
         // Keep those within the final reach (the walk's earlier, wider reach let more in), in order.
         let mut kept = 0;
         for j in 0..near.len {
-            let (a, b) = bvh.boxes[near.index[j] as usize];
-            if lower(a, b, q) < limit {
-                (near.index[kept], near.value[kept]) = (near.index[j], near.value[j]);
+            if near.bound[j] < limit {
+                near.move_entry(j, kept);
                 kept += 1;
             }
         }
@@ -206,25 +214,33 @@ impl NearChildren {
     }
 
     /// Adds a child; false (nothing added) when full.
-    fn push(&mut self, index: u32, value: f32) -> bool {
+    fn push(&mut self, index: u32, bound: f32, value: f32) -> bool {
         if self.len == NEAR_MAX {
             return false;
         }
-        (self.index[self.len], self.value[self.len]) = (index, value);
+        let at = self.len;
+        (self.index[at], self.bound[at], self.value[at]) = (index, bound, value);
         self.len += 1;
         true
+    }
+
+    /// Copies the entry at `from` over the one at `to`.
+    fn move_entry(&mut self, from: usize, to: usize) {
+        self.index[to] = self.index[from];
+        self.bound[to] = self.bound[from];
+        self.value[to] = self.value[from];
     }
 
     /// Sorts the children by index (insertion sort: a few dozen, mostly in order).
     fn sort(&mut self) {
         for j in 1..self.len {
-            let (i, v) = (self.index[j], self.value[j]);
+            let (i, b, v) = (self.index[j], self.bound[j], self.value[j]);
             let mut at = j;
             while at > 0 && self.index[at - 1] > i {
-                (self.index[at], self.value[at]) = (self.index[at - 1], self.value[at - 1]);
+                self.move_entry(at - 1, at);
                 at -= 1;
             }
-            (self.index[at], self.value[at]) = (i, v);
+            (self.index[at], self.bound[at], self.value[at]) = (i, b, v);
         }
     }
 }
@@ -262,9 +278,7 @@ fn ordered_fold<S: Scalar, const FACES: bool>(
         if item & CHILD != 0 {
             let i = (item & !CHILD) as usize;
             let (a, b) = bvh.boxes[i];
-            if !unchanged(lower(a, b, q), d.primal(), kp) {
-                d = smin(d, children[i].eval_as::<S, FACES>(p), k);
-            }
+            d = fold_child::<S, FACES>(d, &children[i], lower(a, b, q), k, p);
             continue;
         }
         let node = &bvh.nodes[item as usize];
@@ -291,9 +305,7 @@ fn ordered_fold<S: Scalar, const FACES: bool>(
     // After an overflow: every child from `rest` on in order, each skipped by its own box only.
     let from = rest.unwrap_or(end);
     for (child, &(a, b)) in children[from..end].iter().zip(&bvh.boxes[from..end]) {
-        if !unchanged(lower(a, b, q), d.primal(), kp) {
-            d = smin(d, child.eval_as::<S, FACES>(p), k);
-        }
+        d = fold_child::<S, FACES>(d, child, lower(a, b, q), k, p);
     }
     d
 }
