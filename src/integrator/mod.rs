@@ -76,4 +76,4 @@ pub use diff::{
 pub use driver::RenderStats;
 pub use gradient::{Gradient, GradientLayout, Loss, LossGradient, loss_gradient, render_gradient};
 pub use options::{BoundaryBudget, DiffOptions, Progress, RenderOptions, VelocityField};
-pub use primal::{CAMERA_STREAM, render, sample_pixel, trace_sample};
+pub use primal::{CAMERA_STREAM, camera_ray, render, sample_pixel, trace_sample, trace_samples};

@@ -10,12 +10,32 @@ use crate::camera::CameraFrame;
 use crate::film::{Image, PixelFilm, SampleSink};
 use crate::math::Vec3;
 use crate::sampler::{Sampler, stratified_2d};
-use crate::scene::Scene;
 use crate::scene::frustum::PixelShapes;
 use crate::scene::shape_list::ShapeList;
+use crate::scene::{Intersection, Scene, packet};
 
 /// Stream of the [`Sampler`] used by camera paths.
 pub const CAMERA_STREAM: u64 = 0;
+
+/// Camera sample `sample` of pixel `(x, y)`: the film offset drawn from the pixel filter (pixels, from
+/// the pixel centre), the camera ray through it and the ray's footprint growth
+/// ([`CameraFrame::spread`]). `frame` is `scene.camera.frame::<f32>()`, built once per render.
+#[inline]
+pub fn camera_ray(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    seed: u64,
+    x: u32,
+    y: u32,
+    sample: u32,
+) -> (glam::Vec2, crate::math::Ray, f32) {
+    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let film = stratified_2d(seed, CAMERA_STREAM, pixel, sample as u64);
+    let offset = scene.camera.filter.sample(film);
+    let ray = frame.generate_ray(centre + offset);
+    (offset, ray, frame.spread(ray.d))
+}
 
 /// Traces camera sample `sample` of pixel `(x, y)` into `record`: draws the film offset from the pixel
 /// filter, generates the ray through it and traces the path. Returns the offset (pixels, from the pixel
@@ -34,19 +54,14 @@ pub fn trace_sample(
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> (glam::Vec2, crate::math::Ray) {
-    let camera = &scene.camera;
-    let pixel = y as u64 * camera.width as u64 + x as u64;
-    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
-    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-    let film = stratified_2d(seed, CAMERA_STREAM, pixel, sample as u64);
-    let offset = camera.filter.sample(film);
-    let ray = frame.generate_ray(centre + offset);
-    let spread = frame.spread(ray.d);
+    let (offset, ray, spread) = camera_ray(scene, frame, seed, x, y, sample);
     let max_scatter = scene.integrator.max_scatter();
     let first = (max_scatter > 0).then(|| match shapes {
         Some(shapes) => scene.intersect_among(&ray, f32::INFINITY, spread, shapes),
         None => scene.intersect_resolving(&ray, f32::INFINITY, spread),
     });
+    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     trace_path_after(
         scene,
         ray,
@@ -57,6 +72,58 @@ pub fn trace_sample(
         counters,
     );
     (offset, ray)
+}
+
+/// [`trace_sample`] for camera samples `samples` of pixel `(x, y)` (at most [`packet::LANES`] of
+/// them), their camera rays' first hits found as one packet ([`Scene::intersect_packet`]: the same
+/// hits, bit for bit): calls `each(sample, offset, ray, record)` after tracing each sample's path
+/// into `record`, in increasing sample order.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_samples(
+    scene: &Scene,
+    frame: &CameraFrame<f32>,
+    seed: u64,
+    x: u32,
+    y: u32,
+    samples: std::ops::Range<u32>,
+    shapes: Option<&ShapeList>,
+    record: &mut PathRecord,
+    counters: &mut TraceCounters,
+    mut each: impl FnMut(u32, glam::Vec2, crate::math::Ray, &PathRecord),
+) {
+    let count = samples.len();
+    assert!(count <= packet::LANES);
+    let max_scatter = scene.integrator.max_scatter();
+    let mut rays = [crate::math::Ray::new(glam::Vec3::ZERO, glam::Vec3::ZERO); packet::LANES];
+    let mut offsets = [glam::Vec2::ZERO; packet::LANES];
+    let mut spreads = [0.0; packet::LANES];
+    for (j, s) in samples.clone().enumerate() {
+        (offsets[j], rays[j], spreads[j]) = camera_ray(scene, frame, seed, x, y, s);
+    }
+    let mut firsts = [Intersection::Miss; packet::LANES];
+    if max_scatter > 0 {
+        scene.intersect_packet(
+            &rays[..count],
+            &spreads[..count],
+            shapes,
+            &mut firsts[..count],
+        );
+    }
+    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+    for (j, s) in samples.enumerate() {
+        let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, s as u64);
+        let first = (max_scatter > 0).then_some(firsts[j]);
+        trace_path_after(
+            scene,
+            rays[j],
+            first,
+            max_scatter,
+            &mut sampler,
+            record,
+            counters,
+        );
+        each(s, offsets[j], rays[j], record);
+    }
 }
 
 /// Radiance of one camera sample of pixel `(x, y)` (f32 image pass), with its tracing counters.
@@ -113,25 +180,31 @@ pub(crate) fn render_with(
             for x in 0..width {
                 let pixel = (y * width + x) as usize;
                 let shapes = pixel_shapes.gather(scene, &frame, x, y, spp);
-                for s in 0..spp {
-                    let l = sample_pixel(
+                for first in (0..spp).step_by(packet::LANES) {
+                    let samples = first..(first + packet::LANES as u32).min(spp);
+                    trace_samples(
                         scene,
                         &frame,
                         options.seed,
                         x,
                         y,
-                        s,
+                        samples,
                         shapes,
                         &mut record,
                         &mut counters,
+                        |s, _, _, record| {
+                            let l: glam::Vec3 = contribution::<f32>(scene, record, detached).into();
+                            if l.is_finite() {
+                                tile.add_own(pixel, Vec3::from(l), 1.0);
+                            } else {
+                                stats.invalid(false, || {
+                                    format!(
+                                        "non-finite radiance {l} at pixel ({x}, {y}), sample {s}"
+                                    )
+                                });
+                            }
+                        },
                     );
-                    if l.is_finite() {
-                        tile.add_own(pixel, Vec3::from(l), 1.0);
-                    } else {
-                        stats.invalid(false, || {
-                            format!("non-finite radiance {l} at pixel ({x}, {y}), sample {s}")
-                        });
-                    }
                 }
             }
             stats.exhausted_rays += counters.exhausted;

@@ -6,6 +6,7 @@ mod bvh;
 pub mod frustum;
 mod integrator_kind;
 pub(crate) mod json;
+pub mod packet;
 mod params;
 pub mod patch;
 mod query;

@@ -10,9 +10,10 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 /// The nearest surface found so far by [`Scene::intersect`].
+#[derive(Clone, Copy)]
 pub(super) struct Nearest {
-    t: f32,
-    surface: Option<Surface>,
+    pub(super) t: f32,
+    pub(super) surface: Option<Surface>,
     /// Normal of an emitter hit (shape normals are computed once, for the final hit only).
     normal: glam::Vec3,
     exhausted: bool,
@@ -100,7 +101,7 @@ impl Scene {
 
     /// The nearest finite emitter `ray` meets in `(0, t_max)`: where [`Scene::nearest`] starts.
     #[inline]
-    fn nearest_emitter(&self, ray: &Ray, t_max: f32) -> Nearest {
+    pub(super) fn nearest_emitter(&self, ray: &Ray, t_max: f32) -> Nearest {
         let mut nearest = Nearest {
             t: t_max,
             surface: None,
@@ -122,7 +123,7 @@ impl Scene {
 
     /// The intersection of the nearest surface found, with its normal.
     #[inline]
-    fn nearest_hit(&self, ray: &Ray, nearest: Nearest) -> Intersection {
+    pub(super) fn nearest_hit(&self, ray: &Ray, nearest: Nearest) -> Intersection {
         match nearest.surface {
             Some(surface) => {
                 let p = ray.at(nearest.t);

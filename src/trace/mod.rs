@@ -191,7 +191,7 @@ pub enum ShapeTrace {
 /// Largest creep step, in units of `eps`. A creep step can only miss a crossing whose chord along the ray
 /// is shorter than the step: on a smooth surface of radius `R` that is a dip of depth `≲ (32 eps)² / 2R`
 /// below the surface, below `eps` whenever `R ≳ 500 eps`.
-const MAX_CREEP: f32 = 64.0;
+pub(crate) const MAX_CREEP: f32 = 64.0;
 /// How far past the secant's estimate of the crossing a step in the creep zone aims, as a multiple of
 /// the estimate (plus one tolerance): far enough that an estimate a little short still brackets the
 /// crossing, close enough that refinement starts from a narrow bracket.

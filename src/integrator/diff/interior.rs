@@ -41,11 +41,12 @@ use crate::integrator::options::{DiffOptions, require_continuous_filter};
 use crate::integrator::path::{
     Attached, LightStrategy, PathRecord, TraceCounters, contribution_parts,
 };
-use crate::integrator::primal::trace_sample;
+use crate::integrator::primal::trace_samples;
 use crate::math::Vec3;
 use crate::scalar::{Directions, Scalar, finite_directions};
 use crate::scene::Scene;
 use crate::scene::frustum::PixelShapes;
+use crate::scene::packet;
 
 /// The image and the interior term of the derivative with respect to the parameters in slots
 /// `0..count`, with a chosen scalar type `S`, in passes of `S::COUNT` parameters (each pass traces the
@@ -122,72 +123,76 @@ where
                 }
                 let shapes = pixel_shapes.gather(scene, &frame32, x, y, spp);
                 let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                for s in 0..spp {
-                    tile.begin_sample();
-                    let (offset, ray) = trace_sample(
+                for first in (0..spp).step_by(packet::LANES) {
+                    let samples = first..(first + packet::LANES as u32).min(spp);
+                    trace_samples(
                         scene,
                         &frame32,
                         seed,
                         x,
                         y,
-                        s,
+                        samples,
                         shapes,
                         &mut record,
                         &mut counters,
+                        |s, offset, ray, record| {
+                            tile.begin_sample();
+                            let (mut l, first) = contribution_parts::<S, _>(scene, record, &attach);
+                            let primal = l.primal();
+                            if !primal.is_finite() {
+                                stats.invalid(false, || {
+                                    format!("non-finite radiance {primal} at pixel ({x}, {y}), sample {s}")
+                                });
+                                l = Vec3::zero();
+                            }
+                            let film_point = film_point(&frame, ray.d, first);
+                            // Density of the film point among all pixels' samples (per pixel's spp), times the
+                            // film area per unit of x1's measure: the detached density of x1.
+                            let motion = film_point.and_then(|((px, py), jacobian)| {
+                                let density = mixture_density(&filter, centre + offset, wi, hi)
+                                    * jacobian.primal();
+                                (density > 0.0 && density.is_finite())
+                                    .then(|| (px, py, jacobian / density))
+                            });
+                            let ok = finite_directions(l.x, width)
+                                && finite_directions(l.y, width)
+                                && finite_directions(l.z, width)
+                                && motion.is_none_or(|(px, py, scale)| {
+                                    finite_directions(px, width)
+                                        && finite_directions(py, width)
+                                        && finite_directions(scale, width)
+                                });
+                            if !ok {
+                                stats.invalid(true, || {
+                                    format!(
+                                        "non-finite derivative at pixel ({x}, {y}), sample {s}: {l:?}, film \
+                                         motion {motion:?}"
+                                    )
+                                });
+                                l = l.detach();
+                            }
+                            // ∂L at a fixed filter weight: the pixel's own sample, as for the image; W's
+                            // integrand is 1 · J₁ (its derivative only: W's primal is 1 by construction).
+                            let j1 = match first {
+                                Some(a) if ok => a.j - a.j.detach(),
+                                _ => S::zero(),
+                            };
+                            tile.add_own(pixel, l, j1);
+                            if let Some((px, py, scale)) = motion.filter(|_| ok) {
+                                // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
+                                let lp = Vec3::<S>::constant(l.primal());
+                                let p = glam::Vec2::new(px.primal(), py.primal());
+                                for (jx, jy) in filter.footprint(p, w, h) {
+                                    let dx = px - (jx as f32 + 0.5);
+                                    let dy = py - (jy as f32 + 0.5);
+                                    let weight = filter.eval(dx, dy) * scale;
+                                    let dw = weight - weight.detach();
+                                    tile.add_splat((jy * w + jx) as usize, lp * dw, dw);
+                                }
+                            }
+                            tile.end_sample();
+                        },
                     );
-                    let (mut l, first) = contribution_parts::<S, _>(scene, &record, &attach);
-                    let primal = l.primal();
-                    if !primal.is_finite() {
-                        stats.invalid(false, || {
-                            format!("non-finite radiance {primal} at pixel ({x}, {y}), sample {s}")
-                        });
-                        l = Vec3::zero();
-                    }
-                    let film_point = film_point(&frame, ray.d, first);
-                    // Density of the film point among all pixels' samples (per pixel's spp), times the
-                    // film area per unit of x1's measure: the detached density of x1.
-                    let motion = film_point.and_then(|((px, py), jacobian)| {
-                        let density =
-                            mixture_density(&filter, centre + offset, wi, hi) * jacobian.primal();
-                        (density > 0.0 && density.is_finite()).then(|| (px, py, jacobian / density))
-                    });
-                    let ok = finite_directions(l.x, width)
-                        && finite_directions(l.y, width)
-                        && finite_directions(l.z, width)
-                        && motion.is_none_or(|(px, py, scale)| {
-                            finite_directions(px, width)
-                                && finite_directions(py, width)
-                                && finite_directions(scale, width)
-                        });
-                    if !ok {
-                        stats.invalid(true, || {
-                            format!(
-                                "non-finite derivative at pixel ({x}, {y}), sample {s}: {l:?}, film \
-                                 motion {motion:?}"
-                            )
-                        });
-                        l = l.detach();
-                    }
-                    // ∂L at a fixed filter weight: the pixel's own sample, as for the image; W's
-                    // integrand is 1 · J₁ (its derivative only: W's primal is 1 by construction).
-                    let j1 = match first {
-                        Some(a) if ok => a.j - a.j.detach(),
-                        _ => S::zero(),
-                    };
-                    tile.add_own(pixel, l, j1);
-                    if let Some((px, py, scale)) = motion.filter(|_| ok) {
-                        // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
-                        let lp = Vec3::<S>::constant(l.primal());
-                        let p = glam::Vec2::new(px.primal(), py.primal());
-                        for (jx, jy) in filter.footprint(p, w, h) {
-                            let dx = px - (jx as f32 + 0.5);
-                            let dy = py - (jy as f32 + 0.5);
-                            let weight = filter.eval(dx, dy) * scale;
-                            let dw = weight - weight.detach();
-                            tile.add_splat((jy * w + jx) as usize, lp * dw, dw);
-                        }
-                    }
-                    tile.end_sample();
                 }
             }
             stats.exhausted_rays += counters.exhausted;
