@@ -243,6 +243,85 @@ fn eps_along(eps: f32, spread: f32x8, origin_magnitude: f32x8, t: f32x8) -> f32x
     floor.max(ulps).max(min)
 }
 
+/// One shape's first crossings along the lanes' rays within their intervals, from the closed form
+/// ([`Scene::lane_first_crossings`]).
+struct FirstCrossings {
+    /// The first crossing after the interval's start, where `reached`.
+    first: f32x8,
+    /// Lanes whose first crossing is certain and lies within the interval (`≤ t1`).
+    reached: u32,
+    /// Lanes the scalar tracer would not answer from the closed form (it would march).
+    uncertain: u32,
+}
+
+impl Scene {
+    /// Shape `shape`'s intervals along the lanes' rays in `[0, t_max]`, as [`Scene::trace_interval`]
+    /// gives them bit for bit (the lanes the registers cannot vouch for take that test, except those
+    /// of `skip`): `(t0, t1, lanes that are non-empty)`.
+    fn lane_intervals(
+        &self,
+        shape: &super::Shape,
+        lanes: &RayLanes,
+        rays: &[Ray; LANES],
+        t_max: f32x8,
+        t_max_each: &[f32; LANES],
+        skip: u32,
+    ) -> (f32x8, f32x8, u32) {
+        let (mut t0, mut t1, mut open, sure) =
+            lanes.intervals(&shape.bounds, self.trace.eps, t_max);
+        let unsure = open & !sure & !skip;
+        if unsure != 0 {
+            let (mut a0, mut a1) = (t0.to_array(), t1.to_array());
+            for k in (0..LANES).filter(|k| unsure & (1 << k) != 0) {
+                match self.trace_interval(shape, &rays[k], t_max_each[k]) {
+                    Some((s0, s1)) => (a0[k], a1[k]) = (s0, s1),
+                    None => open &= !(1 << k),
+                }
+            }
+            (t0, t1) = (f32x8::new(a0), f32x8::new(a1));
+        }
+        (t0, t1, open & !skip)
+    }
+
+    /// The first crossings of `shape` along the lanes' rays in `[t0, t1]` as the scalar tracer's
+    /// closed form finds them (`crate::trace::first_crossing_skipping`), or `None` when the shape has
+    /// no closed form in lanes.
+    fn lane_first_crossings(
+        &self,
+        shape: &super::Shape,
+        lanes: &RayLanes,
+        t0: f32x8,
+        t1: f32x8,
+    ) -> Option<FirstCrossings> {
+        let t = shape.translate.value();
+        let o = [lanes.o[0] - t.x, lanes.o[1] - t.y, lanes.o[2] - t.z];
+        let line = LaneCrossings::of(&shape.sdf, &o, &lanes.d)?;
+        let origin = o[0].abs().max(o[1].abs()).max(o[2].abs());
+        let eps = self.shape_trace(shape).eps;
+        let [first, second] = line.t;
+        let apart = eps_along(eps, lanes.spread, origin, first.abs().max(second.abs()));
+        let close_pair = line.two
+            & (second - first)
+                .simd_lt(f32x8::splat(2.0 * MAX_CREEP) * apart)
+                .to_bitmask();
+        let eps0 = eps_along(eps, lanes.spread, origin, t0);
+        let near_start = line.some & (first - t0).abs().simd_le(eps0).to_bitmask()
+            | line.two & (second - t0).abs().simd_le(eps0).to_bitmask();
+        let behind = line.some & first.simd_le(t0).to_bitmask();
+        let uncertain = line.invalid
+            | close_pair
+            | near_start
+            | behind
+            | (line.some & (line.inside_before | !line.exact_first));
+        let reached = line.some & !uncertain & first.simd_le(t1).to_bitmask();
+        Some(FirstCrossings {
+            first,
+            reached,
+            uncertain,
+        })
+    }
+}
+
 impl Scene {
     /// The first hits of up to [`LANES`] camera rays: `out[k]` is, bit for bit, what
     /// [`Scene::intersect_among`] (with `shapes`) or [`Scene::intersect_resolving`] (without) gives
@@ -285,7 +364,8 @@ impl Scene {
         }
         let nearest: [Nearest; LANES] =
             std::array::from_fn(|k| self.nearest_emitter(&lane_rays[k], f32::INFINITY));
-        let t_max = f32x8::new(nearest.each_ref().map(|n| n.t));
+        let t_max_each = nearest.each_ref().map(|n| n.t);
+        let t_max = f32x8::new(t_max_each);
         let mut best = t_max;
         let mut shape_hit = [usize::MAX; LANES];
         let count = shapes.map_or(self.shapes.len(), ShapeList::len);
@@ -295,20 +375,8 @@ impl Scene {
             }
             let i = shapes.map_or(j, |list| list.indices()[j] as usize);
             let shape = &self.shapes[i];
-            let (mut t0, mut t1, mut open, sure) =
-                lanes.intervals(&shape.bounds, self.trace.eps, t_max);
-            // The lanes the registers cannot vouch for take the shape's own test.
-            let unsure = open & !sure & !fallback;
-            if unsure != 0 {
-                let (mut a0, mut a1) = (t0.to_array(), t1.to_array());
-                for k in (0..LANES).filter(|k| unsure & (1 << k) != 0) {
-                    match self.trace_interval(shape, &lane_rays[k], nearest[k].t) {
-                        Some((s0, s1)) => (a0[k], a1[k]) = (s0, s1),
-                        None => open &= !(1 << k),
-                    }
-                }
-                (t0, t1) = (f32x8::new(a0), f32x8::new(a1));
-            }
+            let (t0, t1, open) =
+                self.lane_intervals(shape, &lanes, &lane_rays, t_max, &t_max_each, fallback);
             // A start level with the nearest hit: the scalar query skips the shape or traces it,
             // by the order it takes.
             fallback |= open & t0.simd_eq(best).to_bitmask();
@@ -316,34 +384,15 @@ impl Scene {
             if active == 0 {
                 continue;
             }
-            let t = shape.translate.value();
-            let o = [lanes.o[0] - t.x, lanes.o[1] - t.y, lanes.o[2] - t.z];
-            let Some(line) = LaneCrossings::of(&shape.sdf, &o, &lanes.d) else {
+            let Some(line) = self.lane_first_crossings(shape, &lanes, t0, t1) else {
                 fallback |= active;
                 continue;
             };
-            let origin = o[0].abs().max(o[1].abs()).max(o[2].abs());
-            let eps = self.shape_trace(shape).eps;
-            let [first, second] = line.t;
-            let apart = eps_along(eps, lanes.spread, origin, first.abs().max(second.abs()));
-            let close_pair = line.two
-                & (second - first)
-                    .simd_lt(f32x8::splat(2.0 * MAX_CREEP) * apart)
-                    .to_bitmask();
-            let eps0 = eps_along(eps, lanes.spread, origin, t0);
-            let near_start = line.some & (first - t0).abs().simd_le(eps0).to_bitmask()
-                | line.two & (second - t0).abs().simd_le(eps0).to_bitmask();
-            let behind = line.some & first.simd_le(t0).to_bitmask();
-            let reached = first.simd_le(t1).to_bitmask();
-            let tie = line.some & reached & first.simd_eq(best).to_bitmask();
-            let uncertain = line.invalid
-                | close_pair
-                | near_start
-                | behind
-                | (line.some & (line.inside_before | !line.exact_first))
-                | tie;
+            let first = line.first;
+            let tie = line.reached & first.simd_eq(best).to_bitmask();
+            let uncertain = line.uncertain | tie;
             fallback |= active & uncertain;
-            let take = active & !uncertain & line.some & reached & first.simd_lt(best).to_bitmask();
+            let take = active & !uncertain & line.reached & first.simd_lt(best).to_bitmask();
             if take != 0 {
                 let mask = f32x8::new(std::array::from_fn(|k| {
                     if take & (1 << k) != 0 {
