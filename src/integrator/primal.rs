@@ -76,7 +76,7 @@ pub fn trace_sample(
 
 /// [`trace_sample`] for camera samples `samples` of pixel `(x, y)` (at most [`packet::LANES`] of
 /// them), their camera rays' first hits found as one packet ([`Scene::intersect_packet`]: the same
-/// hits, bit for bit): calls `each(sample, offset, ray, record)` after tracing each sample's path
+/// hits, bit for bit; one by one below [`packet::MIN_RAYS`] rays): calls `each(sample, offset, ray, record)` after tracing each sample's path
 /// into `record`, in increasing sample order.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_samples(
@@ -101,13 +101,20 @@ pub fn trace_samples(
         (offsets[j], rays[j], spreads[j]) = camera_ray(scene, frame, seed, x, y, s);
     }
     let mut firsts = [Intersection::Miss; packet::LANES];
-    if max_scatter > 0 {
+    if max_scatter > 0 && count >= packet::MIN_RAYS {
         scene.intersect_packet(
             &rays[..count],
             &spreads[..count],
             shapes,
             &mut firsts[..count],
         );
+    } else if max_scatter > 0 {
+        for j in 0..count {
+            firsts[j] = match shapes {
+                Some(shapes) => scene.intersect_among(&rays[j], f32::INFINITY, spreads[j], shapes),
+                None => scene.intersect_resolving(&rays[j], f32::INFINITY, spreads[j]),
+            };
+        }
     }
     let pixel = y as u64 * scene.camera.width as u64 + x as u64;
     for (j, s) in samples.enumerate() {

@@ -33,6 +33,11 @@ use wide::f32x8;
 /// Rays per packet.
 pub const LANES: usize = 8;
 
+/// Fewest rays worth a packet: below, the lanes left empty cost more than they save (a whole render
+/// of the default scene at 1,024×1,024: 1.24× the CPU time of tracing one by one at 1 sample per
+/// pixel, 1.00× at 3, 0.81× at 8 per packet).
+pub const MIN_RAYS: usize = 3;
+
 /// All eight lanes' bits.
 const ALL: u32 = (1 << LANES) - 1;
 
