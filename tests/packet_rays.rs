@@ -17,14 +17,6 @@ use implicit_psdr::scene::shape_list::ShapeList;
 use implicit_psdr::scene::{Intersection, Scene, load, parse};
 use std::path::Path;
 
-/// The scalar answer for `ray` (with the pixel's list when given).
-fn scalar(scene: &Scene, ray: &Ray, spread: f32, shapes: Option<&ShapeList>) -> Intersection {
-    match shapes {
-        Some(list) => scene.intersect_among(ray, f32::INFINITY, spread, list),
-        None => scene.intersect_resolving(ray, f32::INFINITY, spread),
-    }
-}
-
 /// Compares the packet of `rays` (at most eight) with the scalar query ray by ray, bit for bit (the
 /// `Debug` text tells `-0.0` from `0.0`). Returns how many lanes the packet answered one by one.
 fn same_hits(
@@ -37,7 +29,7 @@ fn same_hits(
     let mut out = vec![Intersection::Miss; rays.len()];
     let fallbacks = scene.intersect_packet(rays, spreads, shapes, &mut out);
     for (k, ray) in rays.iter().enumerate() {
-        let want = scalar(scene, ray, spreads[k], shapes);
+        let want = scene.intersect_camera(ray, spreads[k], shapes);
         assert_eq!(
             format!("{:?}", out[k]),
             format!("{want:?}"),

@@ -56,10 +56,7 @@ pub fn trace_sample(
 ) -> (glam::Vec2, crate::math::Ray) {
     let (offset, ray, spread) = camera_ray(scene, frame, seed, x, y, sample);
     let max_scatter = scene.integrator.max_scatter();
-    let first = (max_scatter > 0).then(|| match shapes {
-        Some(shapes) => scene.intersect_among(&ray, f32::INFINITY, spread, shapes),
-        None => scene.intersect_resolving(&ray, f32::INFINITY, spread),
-    });
+    let first = (max_scatter > 0).then(|| scene.intersect_camera(&ray, spread, shapes));
     let pixel = y as u64 * scene.camera.width as u64 + x as u64;
     let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     trace_path_after(
@@ -76,8 +73,9 @@ pub fn trace_sample(
 
 /// [`trace_sample`] for camera samples `samples` of pixel `(x, y)` (at most [`packet::LANES`] of
 /// them), their camera rays' first hits found as one packet ([`Scene::intersect_packet`]: the same
-/// hits, bit for bit; one by one below [`packet::MIN_RAYS`] rays): calls `each(sample, offset, ray, record)` after tracing each sample's path
-/// into `record`, in increasing sample order.
+/// hits, bit for bit; one by one below [`packet::MIN_RAYS`] rays): calls
+/// `each(sample, offset, ray, record)` after tracing each sample's path into `record`, in increasing
+/// sample order.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_samples(
     scene: &Scene,
@@ -110,10 +108,7 @@ pub fn trace_samples(
         );
     } else if max_scatter > 0 {
         for j in 0..count {
-            firsts[j] = match shapes {
-                Some(shapes) => scene.intersect_among(&rays[j], f32::INFINITY, spreads[j], shapes),
-                None => scene.intersect_resolving(&rays[j], f32::INFINITY, spreads[j]),
-            };
+            firsts[j] = scene.intersect_camera(&rays[j], spreads[j], shapes);
         }
     }
     let pixel = y as u64 * scene.camera.width as u64 + x as u64;

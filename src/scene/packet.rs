@@ -1,6 +1,6 @@
 //! Camera rays eight at a time: the first hits of a packet of rays in the lanes of SIMD registers
-//! ([`wide::f32x8`]: one AVX register, or two SSE or NEON ones), with each lane's answer the scalar
-//! query's, bit for bit.
+//! ([`wide::f32x8`]: two SSE or NEON registers in a default build, one AVX register in a build for a
+//! CPU that has it), with each lane's answer the scalar query's, bit for bit.
 //!
 //! [`Scene::intersect_packet`] does, lane by lane, what [`Scene::intersect_among`] and
 //! [`Scene::intersect_resolving`] do for one ray: the nearest finite emitter (one ray at a time),
@@ -55,9 +55,8 @@ struct RayLanes {
 
 impl RayLanes {
     fn new(rays: &[Ray; LANES], spreads: &[f32; LANES]) -> Self {
-        let axis = |f: &dyn Fn(&Ray) -> f32| f32x8::new(std::array::from_fn(|k| f(&rays[k])));
-        let o = [axis(&|r| r.o.x), axis(&|r| r.o.y), axis(&|r| r.o.z)];
-        let d = [axis(&|r| r.d.x), axis(&|r| r.d.y), axis(&|r| r.d.z)];
+        let o = [0, 1, 2].map(|a| f32x8::new(std::array::from_fn(|k| rays[k].o[a])));
+        let d = [0, 1, 2].map(|a| f32x8::new(std::array::from_fn(|k| rays[k].d[a])));
         // As `Aabb::clip_with_margin` computes it (`Vec3A::recip`).
         let inv = d.map(|d| f32x8::ONE / d);
         Self {
@@ -65,7 +64,7 @@ impl RayLanes {
             d,
             inv,
             inv_abs: inv.map(f32x8::abs),
-            origin: axis(&|r| r.o.abs().max_element()),
+            origin: f32x8::new(std::array::from_fn(|k| rays[k].o.abs().max_element())),
             spread: f32x8::new(*spreads),
         }
     }
@@ -329,8 +328,8 @@ impl Scene {
 
 impl Scene {
     /// The first hits of up to [`LANES`] camera rays: `out[k]` is, bit for bit, what
-    /// [`Scene::intersect_among`] (with `shapes`) or [`Scene::intersect_resolving`] (without) gives
-    /// for `rays[k]` with footprint growth `spreads[k]` and no limit along the ray. The lanes whose
+    /// [`Scene::intersect_camera`] gives for `rays[k]` with footprint growth `spreads[k]` and the
+    /// pixel's `shapes`. The lanes whose
     /// answer the closed forms make certain are found eight at a time, the others one by one (module
     /// notes). Returns how many lanes were answered one by one.
     ///
@@ -346,10 +345,7 @@ impl Scene {
     ) -> usize {
         let n = rays.len();
         assert!(n <= LANES && spreads.len() == n && out.len() == n);
-        let scalar = |k: usize| match shapes {
-            Some(list) => self.intersect_among(&rays[k], f32::INFINITY, spreads[k], list),
-            None => self.intersect_resolving(&rays[k], f32::INFINITY, spreads[k]),
-        };
+        let scalar = |k: usize| self.intersect_camera(&rays[k], spreads[k], shapes);
         // Without a list, a scene with a hierarchy walks it: not done in lanes.
         if n == 0 || (shapes.is_none() && self.hierarchy().is_some()) {
             for (k, o) in out.iter_mut().enumerate() {

@@ -82,6 +82,22 @@ impl Scene {
         self.nearest_hit(ray, nearest)
     }
 
+    /// The first hit of a camera ray with footprint growth `spread`: [`Scene::intersect_among`] the
+    /// pixel's `shapes` when they are known ([`super::frustum::PixelShapes`]), else
+    /// [`Scene::intersect_resolving`].
+    #[inline]
+    pub fn intersect_camera(
+        &self,
+        ray: &Ray,
+        spread: f32,
+        shapes: Option<&ShapeList>,
+    ) -> Intersection {
+        match shapes {
+            Some(list) => self.intersect_among(ray, f32::INFINITY, spread, list),
+            None => self.intersect_resolving(ray, f32::INFINITY, spread),
+        }
+    }
+
     /// [`Scene::intersect_resolving`] for a ray that can meet no shape but `shapes`, e.g. a camera
     /// ray with its pixel's shapes ([`super::frustum::PixelShapes`]): the same intersection, bit for
     /// bit, when every other shape's interval along the ray is empty. The list's boxes are tested
