@@ -54,11 +54,11 @@ pub fn trace_sample(
     record: &mut PathRecord,
     counters: &mut TraceCounters,
 ) -> (glam::Vec2, crate::math::Ray) {
+    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     let (offset, ray, spread) = camera_ray(scene, frame, seed, x, y, sample);
     let max_scatter = scene.integrator.max_scatter();
     let first = (max_scatter > 0).then(|| scene.intersect_camera(&ray, spread, shapes));
-    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
-    let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, sample as u64);
     trace_path_after(
         scene,
         ray,
@@ -73,7 +73,7 @@ pub fn trace_sample(
 
 /// [`trace_sample`] for camera samples `samples` of pixel `(x, y)` (at most [`packet::LANES`] of
 /// them), their camera rays' first hits found as one packet ([`Scene::intersect_packet`]: the same
-/// hits, bit for bit; one by one below [`packet::MIN_RAYS`] rays): calls
+/// hits, bit for bit; one by one where the lanes would not pay, [`Scene::packet_pays`]): calls
 /// `each(sample, offset, ray, record)` after tracing each sample's path into `record`, in increasing
 /// sample order.
 #[allow(clippy::too_many_arguments)]
@@ -92,6 +92,13 @@ pub fn trace_samples(
     let count = samples.len();
     assert!(count <= packet::LANES);
     let max_scatter = scene.integrator.max_scatter();
+    if max_scatter == 0 || !scene.packet_pays(count, shapes) {
+        for s in samples {
+            let (offset, ray) = trace_sample(scene, frame, seed, x, y, s, shapes, record, counters);
+            each(s, offset, ray, record);
+        }
+        return;
+    }
     let mut rays = [crate::math::Ray::new(glam::Vec3::ZERO, glam::Vec3::ZERO); packet::LANES];
     let mut offsets = [glam::Vec2::ZERO; packet::LANES];
     let mut spreads = [0.0; packet::LANES];
@@ -99,26 +106,19 @@ pub fn trace_samples(
         (offsets[j], rays[j], spreads[j]) = camera_ray(scene, frame, seed, x, y, s);
     }
     let mut firsts = [Intersection::Miss; packet::LANES];
-    if max_scatter > 0 && count >= packet::MIN_RAYS {
-        scene.intersect_packet(
-            &rays[..count],
-            &spreads[..count],
-            shapes,
-            &mut firsts[..count],
-        );
-    } else if max_scatter > 0 {
-        for j in 0..count {
-            firsts[j] = scene.intersect_camera(&rays[j], spreads[j], shapes);
-        }
-    }
+    scene.intersect_packet(
+        &rays[..count],
+        &spreads[..count],
+        shapes,
+        &mut firsts[..count],
+    );
     let pixel = y as u64 * scene.camera.width as u64 + x as u64;
     for (j, s) in samples.enumerate() {
         let mut sampler = Sampler::new(seed, CAMERA_STREAM, pixel, s as u64);
-        let first = (max_scatter > 0).then_some(firsts[j]);
         trace_path_after(
             scene,
             rays[j],
-            first,
+            Some(firsts[j]),
             max_scatter,
             &mut sampler,
             record,

@@ -136,6 +136,15 @@ fn finite(x: f32x8) -> u32 {
 }
 
 impl LaneCrossings {
+    /// Whether [`LaneCrossings::of`] answers for `sdf`.
+    fn exists(sdf: &Sdf) -> bool {
+        match sdf {
+            Sdf::Named { child, .. } => Self::exists(child),
+            Sdf::Sphere { .. } | Sdf::Box { .. } | Sdf::Plane { .. } => true,
+            _ => false,
+        }
+    }
+
     /// The crossings of the lines `o + t d` (in the node's frame) with `sdf`, or `None` where the node
     /// has no closed form in lanes.
     fn of(sdf: &Sdf, o: &[f32x8; 3], d: &[f32x8; 3]) -> Option<Self> {
@@ -327,6 +336,19 @@ impl Scene {
 }
 
 impl Scene {
+    /// Whether [`Scene::intersect_packet`] does `n` camera rays' work in lanes, with the pixel's
+    /// `shapes`: at least [`MIN_RAYS`] of them; not a scene whose hierarchy they would walk (no
+    /// pixel list); not rays that can meet only shapes without a closed form in lanes (all but those
+    /// that miss them would be answered one by one after the lanes' work). Otherwise it answers them
+    /// one by one.
+    pub fn packet_pays(&self, n: usize, shapes: Option<&ShapeList>) -> bool {
+        let count = shapes.map_or(self.shapes.len(), ShapeList::len);
+        let index = |j: usize| shapes.map_or(j, |list| list.indices()[j] as usize);
+        n >= MIN_RAYS
+            && (shapes.is_some() || self.hierarchy().is_none())
+            && (0..count).any(|j| LaneCrossings::exists(&self.shapes[index(j)].sdf))
+    }
+
     /// The first hits of up to [`LANES`] camera rays: `out[k]` is, bit for bit, what
     /// [`Scene::intersect_camera`] gives for `rays[k]` with footprint growth `spreads[k]` and the
     /// pixel's `shapes`. The lanes whose
@@ -346,8 +368,7 @@ impl Scene {
         let n = rays.len();
         assert!(n <= LANES && spreads.len() == n && out.len() == n);
         let scalar = |k: usize| self.intersect_camera(&rays[k], spreads[k], shapes);
-        // Without a list, a scene with a hierarchy walks it: not done in lanes.
-        if n == 0 || (shapes.is_none() && self.hierarchy().is_some()) {
+        if !self.packet_pays(n, shapes) {
             for (k, o) in out.iter_mut().enumerate() {
                 *o = scalar(k);
             }
