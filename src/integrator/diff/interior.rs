@@ -141,13 +141,17 @@ where
                             let primal = l.primal();
                             if !primal.is_finite() {
                                 stats.invalid(false, || {
-                                    format!("non-finite radiance {primal} at pixel ({x}, {y}), sample {s}")
+                                    format!(
+                                        "non-finite radiance {primal} at pixel ({x}, {y}), \
+                                         sample {s}"
+                                    )
                                 });
                                 l = Vec3::zero();
                             }
                             let film_point = film_point(&frame, ray.d, first);
-                            // Density of the film point among all pixels' samples (per pixel's spp), times the
-                            // film area per unit of x1's measure: the detached density of x1.
+                            // Density of the film point among all pixels' samples (per pixel's
+                            // spp), times the film area per unit of x1's measure: the detached
+                            // density of x1.
                             let motion = film_point.and_then(|((px, py), jacobian)| {
                                 let density = mixture_density(&filter, centre + offset, wi, hi)
                                     * jacobian.primal();
@@ -165,21 +169,23 @@ where
                             if !ok {
                                 stats.invalid(true, || {
                                     format!(
-                                        "non-finite derivative at pixel ({x}, {y}), sample {s}: {l:?}, film \
-                                         motion {motion:?}"
+                                        "non-finite derivative at pixel ({x}, {y}), sample \
+                                         {s}: {l:?}, film motion {motion:?}"
                                     )
                                 });
                                 l = l.detach();
                             }
-                            // ∂L at a fixed filter weight: the pixel's own sample, as for the image; W's
-                            // integrand is 1 · J₁ (its derivative only: W's primal is 1 by construction).
+                            // ∂L at a fixed filter weight: the pixel's own sample, as for the
+                            // image; W's integrand is 1 · J₁ (its derivative only: W's primal is 1
+                            // by construction).
                             let j1 = match first {
                                 Some(a) if ok => a.j - a.j.detach(),
                                 _ => S::zero(),
                             };
                             tile.add_own(pixel, l, j1);
                             if let Some((px, py, scale)) = motion.filter(|_| ok) {
-                                // L ∂(w_j J_film): splatted to every pixel j the film point reaches.
+                                // L ∂(w_j J_film): splatted to every pixel j the film point
+                                // reaches.
                                 let lp = Vec3::<S>::constant(l.primal());
                                 let p = glam::Vec2::new(px.primal(), py.primal());
                                 for (jx, jy) in filter.footprint(p, w, h) {
