@@ -351,9 +351,9 @@ impl Scene {
 
     /// The first hits of up to [`LANES`] camera rays: `out[k]` is, bit for bit, what
     /// [`Scene::intersect_camera`] gives for `rays[k]` with footprint growth `spreads[k]` and the
-    /// pixel's `shapes`. The lanes whose
-    /// answer the closed forms make certain are found eight at a time, the others one by one (module
-    /// notes). Returns how many lanes were answered one by one.
+    /// pixel's `shapes`. The lanes whose answer the closed forms make certain are found eight at a
+    /// time, the others one by one (module notes; all of them where [`Scene::packet_pays`] says
+    /// no). Returns how many lanes were answered one by one.
     ///
     /// # Panics
     ///
