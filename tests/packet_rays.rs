@@ -255,7 +255,7 @@ fn random_rays_hit_what_the_scalar_query_hits_at_every_scale() {
         Vec3::new(0.0, 2.0, 7.0),
         // Inside the ball.
         Vec3::new(0.1, 0.2, 0.3),
-        // Inside the floor slab's bounds, under the ball.
+        // Inside the floor slab itself (its top face is at y = -1.5), under the ball.
         Vec3::new(0.5, -1.8, 0.5),
     ];
     for (offset, scale) in [
