@@ -115,6 +115,8 @@ fn main() {
         layout.entries - params.len()
     );
     let (mut primal, mut complete, mut interior) = (Vec::new(), Vec::new(), Vec::new());
+    // The whole gradient's parts, seconds: loss pass, interior, primary, secondary.
+    let mut parts = Vec::new();
     let mut peak_primal = 0.0;
     for rep in 0..reps {
         let seed = rep as u64;
@@ -136,6 +138,8 @@ fn main() {
         .unwrap();
         complete.push(t.elapsed().as_secs_f64());
         assert_eq!(g.gradient.stats.invalid_derivatives, 0);
+        let [i, p, s] = g.gradient.term_seconds;
+        parts.push([g.loss_seconds, i, p, s]);
         black_box(g);
         let t = Instant::now();
         black_box(
@@ -155,6 +159,14 @@ fn main() {
     println!(
         "grad (loss pass + adjoint pass, interior + primary + secondary) / primal: {:.2} (goal <= 5)",
         median(complete.iter().zip(&primal).map(|(c, p)| c / p).collect())
+    );
+    let part = |k: usize| median(parts.iter().zip(&primal).map(|(s, p)| s[k] / p).collect());
+    println!(
+        "  its parts / primal: loss pass {:.2}, interior {:.2}, primary {:.2}, secondary {:.2}",
+        part(0),
+        part(1),
+        part(2),
+        part(3)
     );
     println!(
         "grad, interior term only / primal: {:.2}",

@@ -12,8 +12,9 @@ pub type DualVec3 = DualSVec32<3>;
 pub type Dual2Vec3 = Dual2SVec32<3>;
 
 macro_rules! impl_scalar_for_num_dual {
-    ($t:ty, $lift:expr) => {
+    ($t:ty, $first_order:expr, $lift:expr) => {
         impl Scalar for $t {
+            const FIRST_ORDER: bool = $first_order;
             #[inline]
             fn constant(v: f32) -> Self {
                 <$t>::from(v)
@@ -88,10 +89,14 @@ macro_rules! impl_scalar_for_num_dual {
     };
 }
 
-impl_scalar_for_num_dual!(Dual32, |value: f32, slot: Slot| if slot == Some(0) {
+impl_scalar_for_num_dual!(Dual32, true, |value: f32, slot: Slot| if slot == Some(0) {
     Dual32::new(value, 1.0)
 } else {
     Dual32::from(value)
 });
-impl_scalar_for_num_dual!(DualVec3, |value: f32, _slot: Slot| DualVec3::from(value));
-impl_scalar_for_num_dual!(Dual2Vec3, |value: f32, _slot: Slot| Dual2Vec3::from(value));
+impl_scalar_for_num_dual!(DualVec3, true, |value: f32, _slot: Slot| DualVec3::from(
+    value
+));
+impl_scalar_for_num_dual!(Dual2Vec3, false, |value: f32, _slot: Slot| Dual2Vec3::from(
+    value
+));

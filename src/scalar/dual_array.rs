@@ -234,6 +234,7 @@ macro_rules! assign_ops {
 assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
 
 impl<const N: usize> Scalar for DualN<N> {
+    const FIRST_ORDER: bool = true;
     #[inline(always)]
     fn constant(v: f32) -> Self {
         Self {

@@ -9,7 +9,7 @@
 //! (so the local derivative carries its own parameter derivatives) and applies the chain rule
 //! `g' = g · d` in each direction.
 
-use super::{LatticeTaps, Scalar, Slot, lattice_sum_nested, rules};
+use super::{LatticeJet, LatticeTaps, Scalar, Slot, lattice_sum_nested, rules};
 use crate::math::Vec3;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
@@ -234,6 +234,59 @@ impl<S: Scalar> Scalar for Grad<S> {
     #[inline]
     fn powf(self, n: f32) -> Self {
         self.chain(rules::powf(self.v, n))
+    }
+
+    /// By the chain rule from the `f32` jet at the primal point `q̄` (`φ̄`, `ḡ`, `H̄`), exact to first
+    /// order in `S`: with `δq = q − q̄` (each coordinate's value, a number in `S` of primal 0), the value
+    /// is `φ̄ + ḡ · δq`, the grid's gradient `G_a = ḡ_a + Σ_b H̄_ab δq_b`, and the spatial gradient
+    /// `g_k = Σ_a G_a ∂q_a/∂x_k`; the values of a reverse-mode block enter through the four lattice
+    /// nodes of the value and gradient sums. Where the generic path evaluates the basis in `Grad<S>`
+    /// arithmetic and sums ten lattices with moving weights, this takes seven [`Scalar::affine`]
+    /// numbers. Only for first-order `S` (a second-order `S` would lose its curvature terms).
+    fn lattice_jet<'a>(q: [Self; 3], jet: impl FnOnce() -> Option<LatticeJet<'a>>) -> Option<Self> {
+        if !S::FIRST_ORDER {
+            return None;
+        }
+        let jet = jet()?;
+        let lattice = match jet.block {
+            Some(_) => S::lattice_sum_with_gradient(
+                &jet.taps, &jet.deriv, jet.values, jet.dims, jet.block,
+            )?,
+            None => [S::zero(); 4],
+        };
+        let (g, h) = (jet.gradient, jet.hessian);
+        let [q0, q1, q2] = q.map(|c| c.v);
+        let v = S::affine(
+            jet.value,
+            &[(lattice[0], 1.0), (q0, g[0]), (q1, g[1]), (q2, g[2])],
+        );
+        let grid_gradient: [S; 3] = std::array::from_fn(|a| {
+            S::affine(
+                g[a],
+                &[
+                    (lattice[a + 1], 1.0),
+                    (q0, h[a][0]),
+                    (q1, h[a][1]),
+                    (q2, h[a][2]),
+                ],
+            )
+        });
+        let gradient = std::array::from_fn(|k| {
+            let j = q.map(|c| c.g[k]);
+            let jp = j.map(|x| x.primal());
+            S::affine(
+                g[0] * jp[0] + g[1] * jp[1] + g[2] * jp[2],
+                &[
+                    (grid_gradient[0], jp[0]),
+                    (grid_gradient[1], jp[1]),
+                    (grid_gradient[2], jp[2]),
+                    (j[0], g[0]),
+                    (j[1], g[1]),
+                    (j[2], g[2]),
+                ],
+            )
+        });
+        Some(Self { v, g: gradient })
     }
 
     /// With a reverse-mode block, by trilinearity: the value is `S`'s sum of the weights' values and

@@ -25,6 +25,28 @@ impl<S: Copy> LatticeTaps<S> {
     }
 }
 
+/// A grid lookup's `f32` jet at a point, with its taps: what [`Scalar::lattice_jet`] builds a lookup
+/// at a moving point from. Derivatives are per unit length of the grid's frame.
+#[derive(Clone, Debug)]
+pub struct LatticeJet<'a> {
+    /// The spline's value (the image's bits).
+    pub value: f32,
+    /// Its gradient.
+    pub gradient: [f32; 3],
+    /// Its Hessian, `hessian[a][b] = ∂a ∂b φ`.
+    pub hessian: [[f32; 3]; 3],
+    /// The taps at the point, with the value's weights.
+    pub taps: LatticeTaps<f32>,
+    /// Each axis's weights differentiated along that axis.
+    pub deriv: [[f32; 4]; 3],
+    /// The lattice's values (x fastest).
+    pub values: &'a [f32],
+    /// The lattice's dimensions `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// The reverse-mode block of the values ([`BlockValues::block`]).
+    pub block: Slot,
+}
+
 /// How the values of a parameter block (a grid's samples, a volume texture's texels) are
 /// differentiated in the current pass.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -23,7 +23,9 @@ pub use directions::{Directions, finite_directions};
 pub use dual::{Dual2Vec3, DualVec3};
 pub use dual_array::{Dual4, Dual8, DualN};
 pub use grad::Grad;
-pub use lattice::{BlockValues, GridValues, LatticeTaps, lattice_sum_f32, lattice_sum_nested};
+pub use lattice::{
+    BlockValues, GridValues, LatticeJet, LatticeTaps, lattice_sum_f32, lattice_sum_nested,
+};
 pub use num_dual::Dual32;
 pub use reverse::{MAX_GRADIENT_ENTRY, Mark, Recording, Rev};
 
@@ -212,6 +214,31 @@ pub trait Scalar:
         block: Slot,
     ) -> Option<[Self; 4]> {
         let _ = (taps, deriv, values, dims, block);
+        None
+    }
+
+    /// Whether this type carries first derivatives only (no second-order parts), so that a smooth
+    /// function of it is exactly its value plus its slope times its change ([`Scalar::affine`]).
+    const FIRST_ORDER: bool = false;
+
+    /// The number with primal `value` whose derivative is `Σ c · (the derivative of x)` over `terms`:
+    /// a smooth function's first-order expansion around the primals of its arguments, with its value
+    /// given rather than recomputed. Exact for [`Scalar::FIRST_ORDER`] types; [`Rev`] records it as
+    /// one node.
+    #[inline(always)]
+    fn affine(value: f32, terms: &[(Self, f32)]) -> Self {
+        terms.iter().fold(Self::constant(value), |acc, &(x, c)| {
+            acc + (x - x.primal()) * c
+        })
+    }
+
+    /// A grid's spline at a point `q` whose coordinates carry derivatives, built by the chain rule from
+    /// the spline's `f32` jet at the primal point (`jet`, called only by types that use it); `None`
+    /// (the default) lets the lookup evaluate the basis in this type's own arithmetic. [`Grad`] over a
+    /// first-order type implements it.
+    #[inline(always)]
+    fn lattice_jet<'a>(q: [Self; 3], jet: impl FnOnce() -> Option<LatticeJet<'a>>) -> Option<Self> {
+        let _ = (q, jet);
         None
     }
 

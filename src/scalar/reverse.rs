@@ -471,6 +471,12 @@ macro_rules! assign_ops {
 assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
 
 impl Scalar for Rev {
+    const FIRST_ORDER: bool = true;
+    /// One node whose operands are the terms.
+    #[inline(always)]
+    fn affine(value: f32, terms: &[(Self, f32)]) -> Self {
+        Self::record(value, terms)
+    }
     #[inline(always)]
     fn constant(v: f32) -> Self {
         Self::new(v)

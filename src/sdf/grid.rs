@@ -241,8 +241,16 @@ fn spline<S: Scalar>(
     if let (Some(x), Some(y), Some(z)) = (q.x.as_f32(), q.y.as_f32(), q.z.as_f32()) {
         return S::constant(spline_f32(data, bmin, bmax, glam::Vec3::new(x, y, z)));
     }
-    let ext = bmax - bmin;
     let linear = q.x.spatial_only() && q.y.spatial_only() && q.z.spatial_only();
+    // A point moving with parameters (a transformed grid's attached vertex): by the chain rule from
+    // the `f32` jet, for the types that do so; not with a forward-mode direction of the values.
+    if !linear && !matches!(selection, BlockValues::Direction { .. }) {
+        let jet = || super::grid_jet::lattice_jet(data, bmin, bmax, selection.block(), q.primal());
+        if let Some(v) = S::lattice_jet([q.x, q.y, q.z], jet) {
+            return v;
+        }
+    }
+    let ext = bmax - bmin;
     let taps = |a: usize, c: S| {
         let n = data.dims[a];
         let inv_h = inv_spacing(n, ext[a]);

@@ -13,6 +13,7 @@
 
 use super::GridData;
 use super::grid::{LaneCells, cubic_basis, cubic_basis_slope, fold_ghosts};
+use crate::scalar::{LatticeJet, LatticeTaps, Slot};
 use glam::Vec4;
 
 /// The weights of one axis's four taps for the value and its first and second derivatives along the
@@ -63,8 +64,48 @@ pub(super) fn jet<const SECOND: bool>(
     if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
         return None;
     }
+    Some(sums::<SECOND>(
+        data,
+        &axes_jet(p, bmin, bmax - bmin, data.dims),
+    ))
+}
+
+/// [`jet`] with the Hessian and the taps, for a lookup at a point that carries derivatives
+/// ([`crate::scalar::Scalar::lattice_jet`]); `block` is the values' reverse-mode block.
+#[inline]
+pub(super) fn lattice_jet<'a>(
+    data: &'a GridData,
+    bmin: glam::Vec3,
+    bmax: glam::Vec3,
+    block: Slot,
+    p: glam::Vec3,
+) -> Option<LatticeJet<'a>> {
+    if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
+        return None;
+    }
+    let axes = axes_jet(p, bmin, bmax - bmin, data.dims);
+    let (value, g, h) = sums::<true>(data, &axes);
+    let [x, y, z] = &axes;
+    Some(LatticeJet {
+        value,
+        gradient: g.to_array(),
+        hessian: h.transpose().to_cols_array_2d(),
+        taps: LatticeTaps {
+            index: [x.index, y.index, z.index],
+            weight: [x.w, y.w, z.w],
+        },
+        deriv: [x.d, y.d, z.d],
+        values: &data.values,
+        dims: data.dims,
+        block,
+    })
+}
+
+/// The value, gradient and (with `SECOND`) Hessian sums over the taps `axes`.
+#[inline(always)]
+fn sums<const SECOND: bool>(data: &GridData, axes: &[AxisJet; 3]) -> (f32, glam::Vec3, glam::Mat3) {
     let [nx, ny, _] = data.dims;
-    let [x, y, z] = axes_jet(p, bmin, bmax - bmin, data.dims);
+    let [x, y, z] = axes;
     let values = &data.values;
     // Each row's four x taps ride as one vector through the sums over y and z, weighted by (y order, z
     // order), and meet the x weights of each order last, the spline's own summation order
@@ -104,7 +145,7 @@ pub(super) fn jet<const SECOND: bool>(
     } else {
         glam::Mat3::ZERO
     };
-    Some((dot(&x.w, &a00), g, h))
+    (dot(&x.w, &a00), g, h)
 }
 
 #[cfg(test)]
@@ -340,6 +381,127 @@ mod tests {
         assert!(jets > 1000, "only {jets} points inside the grid's box");
         assert!(worst_g < 1e-5, "gradient off by {worst_g} relative");
         assert!(worst_h < 1e-5, "Hessian off by {worst_h} relative");
+    }
+
+    /// A grid in the frame of a rotation by `θ` about a fixed axis, a translation `t` and a scale `s`
+    /// (`q = Rᵀ(θ)(x − t)/s`), looked up at `x` seeded in space: the lookup at a moving point.
+    fn moving_lookup<S: crate::scalar::Scalar>(
+        data: &GridData,
+        (bmin, bmax): (glam::Vec3, glam::Vec3),
+        selection: &BlockValues,
+        x: glam::Vec3,
+        [theta, tx, s]: [S; 3],
+        t: glam::Vec3,
+    ) -> Grad<S> {
+        use crate::math::Vec3;
+        use crate::scalar::Scalar;
+        let axis = glam::Vec3::new(1.0, 2.0, 2.0) / 3.0;
+        let lift = |v: S| Grad {
+            v,
+            g: [S::zero(); 3],
+        };
+        let (theta, s) = (lift(theta), lift(s));
+        let a = Vec3::new(
+            Grad::constant(axis.x),
+            Grad::constant(axis.y),
+            Grad::constant(axis.z),
+        );
+        let d = Grad::<S>::seed(x) - Vec3::new(lift(tx), Grad::constant(t.y), Grad::constant(t.z));
+        // Rodrigues for the inverse rotation: v cos θ − (a × v) sin θ + a (a · v)(1 − cos θ).
+        let (cos, sin) = (theta.cos(), theta.sin());
+        let along = a.dot(d) * (Grad::one() - cos);
+        let q = (d * cos - a.cross(d) * sin + a * along) * s.recip();
+        crate::sdf::grid::eval(data, bmin, bmax, selection, q)
+    }
+
+    /// A lookup at a point that moves with parameters (a rotated, moved and scaled grid's attached
+    /// vertex), built from the `f32` jet by the chain rule, has the derivatives of the generic path
+    /// (the basis in `Grad<S>` arithmetic, which a forward-mode direction of the values still takes),
+    /// to rounding: in forward mode for the transform's parameters, and in reverse mode for them and
+    /// for the grid's values (against forward mode's direction `u` of the values).
+    #[test]
+    fn lookups_at_moving_points_match_the_generic_path() {
+        use crate::scalar::{Dual4, Recording, Rev, Scalar};
+        let (bmin, bmax) = (
+            glam::Vec3::new(-1.0, -0.5, -1.5),
+            glam::Vec3::new(1.0, 1.0, 0.5),
+        );
+        let node = grid([7, 6, 9], bmin, bmax, 21);
+        let Sdf::Grid { data, .. } = &node else {
+            unreachable!()
+        };
+        let n = data.values.len();
+        let u: Vec<f32> = (0..n)
+            .map(|k| ((k * 37 % 101) as f32 / 50.0) - 1.0)
+            .collect();
+        let direction = BlockValues::Direction {
+            slot: 3,
+            u: Arc::new(u.clone()),
+        };
+        let (theta, t, scale) = (0.7f32, glam::Vec3::new(0.3, -0.2, 0.1), 1.3f32);
+        let rotation = glam::Quat::from_axis_angle(glam::Vec3::new(1.0, 2.0, 2.0) / 3.0, theta);
+        let mut rng = crate::sampler::Sampler::new(2, 0, 5, 0);
+        let _recording = Recording::start();
+        let mut worst = 0.0f32;
+        for _ in 0..2000 {
+            // Not on the box's faces, where the field's gradient jumps and an ulp of `q` picks the
+            // side; the first and last cells (the ghost points' taps) are still met.
+            let r = glam::Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d());
+            let q = bmin + (bmax - bmin) * (r * 0.998 + 0.001);
+            let x = rotation * (q * scale) + t;
+            let params = |slot: u32, v: f32| Dual4::lift(v, Some(slot));
+            let dual = [params(0, theta), params(1, t.x), params(2, scale)];
+            let lookup =
+                |selection: &BlockValues| moving_lookup(data, (bmin, bmax), selection, x, dual, t);
+            let (jet, generic) = (lookup(&BlockValues::Constant), lookup(&direction));
+            let mark = Recording::mark();
+            let rev = [0, 1, 2].map(|i| Rev::lift([theta, t.x, scale][i], Some(i as u32)));
+            let reverse = moving_lookup(
+                data,
+                (bmin, bmax),
+                &BlockValues::Gradient { first: 3 },
+                x,
+                rev,
+                t,
+            );
+            let outputs = |g: &Grad<Dual4>| [g.v, g.g[0], g.g[1], g.g[2]];
+            let reverse = [reverse.v, reverse.g[0], reverse.g[1], reverse.g[2]];
+            for ((a, b), r) in outputs(&jet).iter().zip(outputs(&generic)).zip(reverse) {
+                // The generic path's slot 3 is the values' direction; the jet's (constant values)
+                // has none.
+                let mut rev = [0.0f32; 4];
+                Recording::sweep(r, |e, d| {
+                    if e < 3 {
+                        rev[e as usize] += d
+                    } else {
+                        rev[3] += d * u[e as usize - 3]
+                    }
+                });
+                let scale = 1.0 + b.re.abs() + b.eps.iter().fold(0.0f32, |m, e| m.max(e.abs()));
+                assert!(
+                    (a.re - b.re).abs() <= 1e-5 * scale,
+                    "value at {q}: {a:?} vs {b:?}"
+                );
+                assert_eq!(
+                    r.primal().to_bits(),
+                    a.re.to_bits(),
+                    "reverse primal at {q}"
+                );
+                for (i, &reverse) in rev.iter().enumerate() {
+                    let jet_eps = if i < 3 { a.eps[i] } else { b.eps[3] };
+                    for got in [jet_eps, reverse] {
+                        let err = (got - b.eps[i]).abs() / scale;
+                        worst = worst.max(err);
+                        assert!(err < 2e-5, "direction {i} at {q}: {got} vs {}", b.eps[i]);
+                    }
+                }
+            }
+            Recording::rewind(mark);
+        }
+        assert!(
+            worst > 0.0,
+            "the paths agree bit for bit: is the jet's path taken?"
+        );
     }
 
     /// Outside the box there is no jet (the field adds the distance to the box there).
