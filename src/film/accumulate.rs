@@ -26,6 +26,30 @@ pub trait SampleSink<S: Scalar> {
     /// A share of pixel `pixel`'s `F` and `W`, already weighted by that pixel's filter over the
     /// sample's density.
     fn add_splat(&mut self, pixel: usize, radiance: Vec3<S>, weight: S);
+    /// The moving pixel filter's shares of a camera sample whose film point `(px, py)` moves with the
+    /// parameters (the interior term's `L ∂(w_j J_film)`): for each pixel `j` of a `width × height`
+    /// image under `filter` there, [`SampleSink::add_splat`] of `radiance · Δw_j` and `Δw_j`, where
+    /// `w_j = filter(p − centre_j) · scale` and `Δw_j = w_j − w̄_j` its derivative part (primal 0);
+    /// `radiance` is a constant. A reverse-mode sink may add the footprint's shares as one number.
+    #[inline]
+    fn add_motion(
+        &mut self,
+        filter: &Filter,
+        (px, py): (S, S),
+        scale: S,
+        radiance: glam::Vec3,
+        (width, height): (u32, u32),
+    ) {
+        let lp = Vec3::<S>::constant(radiance);
+        let p = glam::Vec2::new(px.primal(), py.primal());
+        for (jx, jy) in filter.footprint(p, width, height) {
+            let dx = px - (jx as f32 + 0.5);
+            let dy = py - (jy as f32 + 0.5);
+            let weight = filter.eval(dx, dy) * scale;
+            let dw = weight - weight.detach();
+            self.add_splat((jy * width + jx) as usize, lp * dw, dw);
+        }
+    }
     /// Whether the camera samples of pixel `pixel` (row-major index) can change what the sink holds;
     /// `false` lets an estimator skip them (a reverse-mode sink whose pixel adjoint is zero wherever
     /// they can land, [`super::AdjointFilm::skipping_zero_adjoint`]).

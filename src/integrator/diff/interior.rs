@@ -186,15 +186,7 @@ where
                             if let Some((px, py, scale)) = motion.filter(|_| ok) {
                                 // L ∂(w_j J_film): splatted to every pixel j the film point
                                 // reaches.
-                                let lp = Vec3::<S>::constant(l.primal());
-                                let p = glam::Vec2::new(px.primal(), py.primal());
-                                for (jx, jy) in filter.footprint(p, w, h) {
-                                    let dx = px - (jx as f32 + 0.5);
-                                    let dy = py - (jy as f32 + 0.5);
-                                    let weight = filter.eval(dx, dy) * scale;
-                                    let dw = weight - weight.detach();
-                                    tile.add_splat((jy * w + jx) as usize, lp * dw, dw);
-                                }
+                                tile.add_motion(&filter, (px, py), scale, l.primal(), (w, h));
                             }
                             tile.end_sample();
                         },
