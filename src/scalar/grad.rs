@@ -242,7 +242,8 @@ impl<S: Scalar> Scalar for Grad<S> {
     /// `g_k = Σ_a G_a ∂q_a/∂x_k`; the values of a reverse-mode block enter through the four lattice
     /// nodes of the value and gradient sums. Where the generic path evaluates the basis in `Grad<S>`
     /// arithmetic and sums ten lattices with moving weights, this takes seven [`Scalar::affine`]
-    /// numbers. Only for first-order `S` (a second-order `S` would lose its curvature terms).
+    /// numbers (docs/theory.md (10.3)). Only for first-order `S` (a second-order `S` would lose its
+    /// curvature terms).
     fn lattice_jet<'a>(q: [Self; 3], jet: impl FnOnce() -> Option<LatticeJet<'a>>) -> Option<Self> {
         if !S::FIRST_ORDER {
             return None;
