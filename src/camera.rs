@@ -15,7 +15,7 @@
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::math::{Ray, Vec3};
-use crate::scalar::{Param, Param3, Scalar};
+use crate::scalar::{DualN, Param, Param3, Scalar};
 
 /// A pinhole camera with its film.
 #[derive(Clone, Debug, PartialEq)]
@@ -180,6 +180,48 @@ impl CameraFrame<f32> {
 }
 
 impl<S: Scalar> CameraFrame<S> {
+    /// [`CameraFrame::project`] and [`CameraFrame::film_area_jacobian`] of a surface point `p` with
+    /// unit normal `n`. For a recorded type ([`Scalar::RECORDED`]) and a frame that does not move
+    /// with the parameters, each result is one [`Scalar::affine`] number over `p` and `n`, its
+    /// partials from a six-direction dual in `f32` (same primal bits, derivatives to rounding), where
+    /// the two formulas take about forty nodes.
+    #[inline]
+    pub fn film_position(&self, p: Vec3<S>, n: Vec3<S>) -> Option<((S, S), S)> {
+        let fixed = [self.origin, self.right, self.up, self.forward]
+            .iter()
+            .all(|v| v.x.is_constant() && v.y.is_constant() && v.z.is_constant())
+            && self.focal.is_constant();
+        if !(S::RECORDED && S::FIRST_ORDER && fixed) {
+            return Some((self.project(p)?, self.film_area_jacobian(p, n)));
+        }
+        type D6 = DualN<6>;
+        let constant = |v: Vec3<S>| Vec3::<D6>::constant(v.primal());
+        let frame = CameraFrame::<D6> {
+            origin: constant(self.origin),
+            right: constant(self.right),
+            up: constant(self.up),
+            forward: constant(self.forward),
+            focal: D6::constant(self.focal.primal()),
+            center: self.center,
+        };
+        let seeded = |v: Vec3<S>, first: usize| {
+            Vec3::new(
+                D6::variable(v.x.primal(), first),
+                D6::variable(v.y.primal(), first + 1),
+                D6::variable(v.z.primal(), first + 2),
+            )
+        };
+        let (p6, n6) = (seeded(p, 0), seeded(n, 3));
+        let (x, y) = frame.project(p6)?;
+        let jacobian = frame.film_area_jacobian(p6, n6);
+        let over = [p.x, p.y, p.z, n.x, n.y, n.z];
+        let fuse = |d: D6, k: usize| {
+            let terms: [(S, f32); 6] = std::array::from_fn(|i| (over[i], d.eps[i]));
+            S::affine(d.re, &terms[..k])
+        };
+        Some(((fuse(x, 3), fuse(y, 3)), fuse(jacobian, 6)))
+    }
+
     /// Film position (pixels) of `p`, or `None` if `p` is not in front of the eye (`(p − o)·forward ≤ 0`).
     #[inline]
     pub fn project(&self, p: Vec3<S>) -> Option<(S, S)> {

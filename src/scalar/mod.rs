@@ -221,6 +221,11 @@ pub trait Scalar:
     /// function of it is exactly its value plus its slope times its change ([`Scalar::affine`]).
     const FIRST_ORDER: bool = false;
 
+    /// Whether every operation on this type is recorded (a reverse-mode tape node), so that fusing a
+    /// computation into one [`Scalar::affine`] number, its partials taken in `f32`, saves work; for
+    /// the forward-mode types it would only change their derivatives' rounding.
+    const RECORDED: bool = false;
+
     /// The number with primal `value` whose derivative is `Σ c · (the derivative of x)` over `terms`:
     /// a smooth function's first-order expansion around the primals of its arguments, with its value
     /// given rather than recomputed. Exact for [`Scalar::FIRST_ORDER`] types; [`Rev`] records it as

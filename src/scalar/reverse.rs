@@ -472,6 +472,7 @@ assign_ops!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign
 
 impl Scalar for Rev {
     const FIRST_ORDER: bool = true;
+    const RECORDED: bool = true;
     /// One node whose operands are the terms.
     #[inline(always)]
     fn affine(value: f32, terms: &[(Self, f32)]) -> Self {

@@ -233,7 +233,7 @@ fn film_point<S: Scalar>(
     first: Option<Attached<S>>,
 ) -> Option<((S, S), S)> {
     match first {
-        Some(a) => Some((frame.project(a.x)?, frame.film_area_jacobian(a.x, a.n))),
+        Some(a) => frame.film_position(a.x, a.n),
         None => {
             let d = Vec3::<S>::constant(dir);
             let z = d.dot(frame.forward);
