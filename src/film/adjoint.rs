@@ -23,10 +23,10 @@ use super::accumulate::{Film, SampleSink};
 use super::{Filter, Image, Normalization};
 use crate::math::Vec3;
 use crate::scalar::{DualN, Mark, Recording, Rev, Scalar};
+use std::sync::{Arc, Mutex};
 
 /// Two derivative directions: a pixel filter's value with its partials along x and y.
 type Dual2 = DualN<2>;
-use std::sync::{Arc, Mutex};
 
 /// A reverse-mode film over a `width × height` image.
 pub struct AdjointFilm<'a> {
