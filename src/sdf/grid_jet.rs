@@ -12,7 +12,7 @@
 //! back to AD there.
 
 use super::GridData;
-use super::grid::{LaneCells, cubic_basis, cubic_basis_slope, fold_ghosts};
+use super::spline_basis::{LaneCells, cubic_basis, cubic_basis_slope, fold_ghosts};
 use crate::scalar::{LatticeJet, LatticeTaps, Slot};
 use glam::Vec4;
 

@@ -41,6 +41,7 @@ pub mod interval;
 mod line_crossings;
 mod primitive;
 mod primitives;
+mod spline_basis;
 mod transform;
 mod validate;
 
