@@ -249,13 +249,18 @@ impl<S: Scalar> Scalar for Grad<S> {
             return None;
         }
         let jet = jet()?;
+        let (g, h) = (jet.gradient, jet.hessian);
         let lattice = match jet.block {
             Some(_) => S::lattice_sum_with_gradient(
-                &jet.taps, &jet.deriv, jet.values, jet.dims, jet.block,
+                &jet.taps,
+                &jet.deriv,
+                jet.values,
+                jet.dims,
+                jet.block,
+                Some([jet.value, g[0], g[1], g[2]]),
             )?,
             None => [S::zero(); 4],
         };
-        let (g, h) = (jet.gradient, jet.hessian);
         let [q0, q1, q2] = q.map(|c| c.v);
         let v = S::affine(
             jet.value,
@@ -305,7 +310,7 @@ impl<S: Scalar> Scalar for Grad<S> {
         }
         if let Some((fixed, deriv)) = axis_aligned_constant(taps)
             && let Some([v, gx, gy, gz]) =
-                S::lattice_sum_with_gradient(&fixed, &deriv, values, dims, block)
+                S::lattice_sum_with_gradient(&fixed, &deriv, values, dims, block, None)
         {
             return Self { v, g: [gx, gy, gz] };
         }

@@ -204,7 +204,8 @@ pub trait Scalar:
     /// [`Scalar::lattice_sum`] would give for constant weights `taps` whose derivative along axis
     /// `a` is `deriv[a]` for axis `a`'s own weights and 0 for the others', with the same primal bits
     /// and the same derivatives; `None` to let it take its generic path (the default, and for any
-    /// type but [`Rev`], which computes the four sums in one pass).
+    /// type but [`Rev`], which computes the four sums in one pass). `sums` are those four sums'
+    /// values where the caller has them already (a grid's `f32` jet), so they are not summed again.
     #[inline(always)]
     fn lattice_sum_with_gradient(
         taps: &LatticeTaps<f32>,
@@ -212,8 +213,9 @@ pub trait Scalar:
         values: &[f32],
         dims: [usize; 3],
         block: Slot,
+        sums: Option<[f32; 4]>,
     ) -> Option<[Self; 4]> {
-        let _ = (taps, deriv, values, dims, block);
+        let _ = (taps, deriv, values, dims, block, sums);
         None
     }
 

@@ -539,18 +539,23 @@ impl Scalar for Rev {
         self.unary(rules::sqr(self.v))
     }
 
-    /// Four lattice nodes (no operands: the weights are constants), the sums computed in one pass; the
-    /// gradient's primals are those of the generic path, which adds two constant zero parts to each.
+    /// Four lattice nodes (no operands: the weights are constants), the sums computed in one pass
+    /// unless given; the gradient's primals are those of the generic path, which adds two constant
+    /// zero parts to each.
     fn lattice_sum_with_gradient(
         taps: &LatticeTaps<f32>,
         deriv: &[[f32; 4]; 3],
         values: &[f32],
         dims: [usize; 3],
         block: Slot,
+        sums: Option<[f32; 4]>,
     ) -> Option<[Self; 4]> {
         let first = block?;
         let [nx, ny, _] = dims;
-        let [v, px, py, pz] = lattice_sums_with_derivatives_f32(taps, deriv, values, nx, ny)?;
+        let [v, px, py, pz] = match sums {
+            Some(sums) => sums,
+            None => lattice_sums_with_derivatives_f32(taps, deriv, values, nx, ny)?,
+        };
         let [wx, wy, wz] = taps.weight;
         let [dx, dy, dz] = *deriv;
         let lattice = (dims, values.len());

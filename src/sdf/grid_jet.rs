@@ -61,13 +61,19 @@ pub(super) fn jet<const SECOND: bool>(
     bmax: glam::Vec3,
     p: glam::Vec3,
 ) -> Option<(f32, glam::Vec3, glam::Mat3)> {
-    if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
+    if !has_jet(data, bmin, bmax, p) {
         return None;
     }
     Some(sums::<SECOND>(
         data,
         &axes_jet(p, bmin, bmax - bmin, data.dims),
     ))
+}
+
+/// Whether the taps answer at `p`: a usable grid and `p` in its box (not a NaN).
+#[inline(always)]
+fn has_jet(data: &GridData, bmin: glam::Vec3, bmax: glam::Vec3, p: glam::Vec3) -> bool {
+    data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()
 }
 
 /// [`jet`] with the Hessian and the taps, for a lookup at a point that carries derivatives
@@ -80,7 +86,7 @@ pub(super) fn lattice_jet<'a>(
     block: Slot,
     p: glam::Vec3,
 ) -> Option<LatticeJet<'a>> {
-    if !(data.usable() && p.cmpge(bmin).all() && p.cmple(bmax).all()) {
+    if !has_jet(data, bmin, bmax, p) {
         return None;
     }
     let axes = axes_jet(p, bmin, bmax - bmin, data.dims);
