@@ -5,13 +5,15 @@
 //!
 //! The optimised grid is the target's shape (the smooth union of `target.json`) baked over the
 //! grid's box at `N³` (`--grid N`, default 16; the race refines 16 → 31 → 61), so that the silhouette
-//! and the tracing cost are those of a shape near the end of each stage. Targets: the target scene at
-//! 64 spp (`--targets-spp`).
+//! and the tracing cost are those of a shape near the end of each stage; or, with `--state
+//! result.json`, the grid and level of a scene `optimize` wrote (a shape the race itself reached, not
+//! an exact distance). Targets: the target scene at 64 spp (`--targets-spp`). The loss is the race's
+//! (its image pyramid included).
 //!
 //! Prints per iteration (summed over the 6 views) the seconds of the primal renders, the loss passes,
 //! the interior, primary and secondary terms, and each as a ratio to the primal.
 //!
-//! `cargo bench --bench race_iteration [-- --grid 61] [-- REPS]`.
+//! `cargo bench --bench race_iteration [-- --grid 61 | --state DIR/result.json] [-- REPS]`.
 //!
 //! To profile the iteration alone (`perf record` on the bench's executable), `--targets-spp 1` renders
 //! the targets at 1 spp and `--no-primal` skips the primal renders (the table then has no ratios):
@@ -41,9 +43,12 @@ fn main() {
     let targets_spp: u32 = (args.iter().position(|a| a == "--targets-spp"))
         .and_then(|i| args.get(i + 1)?.parse().ok())
         .unwrap_or(64);
+    let state = (args.iter().position(|a| a == "--state")).and_then(|i| args.get(i + 1));
     let primal = !args.iter().any(|a| a == "--no-primal");
     let reps: usize = (args.iter().enumerate())
-        .filter(|(i, _)| *i == 0 || !matches!(args[i - 1].as_str(), "--grid" | "--targets-spp"))
+        .filter(|(i, _)| {
+            *i == 0 || !matches!(args[i - 1].as_str(), "--grid" | "--targets-spp" | "--state")
+        })
         .find_map(|(_, a)| a.parse().ok())
         .unwrap_or(3);
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -54,10 +59,24 @@ fn main() {
     };
     let node = cfg.settings.grids[0].clone();
     let mut scene = cfg.scene.clone();
-    let [lo, hi] = scene.grid_box(&node).unwrap();
-    let baked = bake(&target.shapes[0].sdf, lo, hi, grid);
-    scene.set_grid(&node, baked).unwrap();
-    let scene = scene.with_parameter(&format!("{node}.level"), 0.0).unwrap();
+    let level = format!("{node}.level");
+    let scene = match state {
+        Some(path) => {
+            let reached = implicit_psdr::scene::load(Path::new(path)).expect("--state loads");
+            let data = reached
+                .grid_values(&node)
+                .expect("--state has the race's grid");
+            scene.set_grid(&node, (*data).clone()).unwrap();
+            let level_value = reached.parameter(&level).unwrap();
+            scene.with_parameter(&level, level_value).unwrap()
+        }
+        None => {
+            let [lo, hi] = scene.grid_box(&node).unwrap();
+            let baked = bake(&target.shapes[0].sdf, lo, hi, grid);
+            scene.set_grid(&node, baked).unwrap();
+            scene.with_parameter(&level, 0.0).unwrap()
+        }
+    };
     let spp = cfg.settings.spp;
     let targets: Vec<_> = (cfg.views.iter().enumerate())
         .map(|(k, v)| {
@@ -112,7 +131,7 @@ fn main() {
                 &scene,
                 &layout,
                 &opt.targets[v],
-                opt.settings.loss,
+                opt.settings.loss.multiscale(opt.settings.loss_scales),
                 &options,
             )
             .unwrap();

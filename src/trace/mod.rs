@@ -263,6 +263,9 @@ struct Marcher<'a> {
     ray: &'a Ray,
     /// The shape's certified empty cells, and the ray in their lattice coordinates: marching skips them.
     space: Option<(&'a EmptySpace, LatticeRay)>,
+    /// The straddling cell where marching starts, when the caller's query of `space` found it: the
+    /// first search takes it instead of asking again ([`NO_CELL`] otherwise).
+    seed: Candidate,
     /// Inverse Lipschitz bounds outside and inside.
     inv_l: [f32; 2],
     t1: f32,
@@ -295,6 +298,7 @@ impl<'a> Marcher<'a> {
             sdf,
             ray,
             space: None,
+            seed: NO_CELL,
             inv_l: [lipschitz.outside, lipschitz.inside].map(inverse_lipschitz),
             t1,
             settings,
@@ -402,8 +406,10 @@ impl<'a> Marcher<'a> {
         let mut creep = self.eps(t);
         // The previous sample on this side, for the secant's estimate of where the surface is.
         let mut previous: Option<(f32, f32)> = None;
-        // The straddling cell of `space` the ray is in, until it leaves it.
-        let mut cell = NO_CELL;
+        // The straddling cell of `space` the ray is in, until it leaves it: the seed if the search
+        // starts where it was found (the query there would find it again).
+        let seed = std::mem::replace(&mut self.seed, NO_CELL);
+        let mut cell = if seed.t == t { seed } else { NO_CELL };
         let side = usize::from(sign < 0.0);
         // The slope of `g` along the ray at `t`, when the evaluation there gave it.
         let mut slope: Option<f32> = None;
@@ -756,19 +762,22 @@ pub fn first_crossing_skipping(
 ) -> ShapeTrace {
     // The ray in the lattice's coordinates, once for the first skip and the marcher's.
     let space = space.map(|s| (s, s.lattice_ray(ray)));
-    let t0 = match &space {
+    let seed = match &space {
         Some((space, lattice_ray)) => match space.first_candidate_lattice(lattice_ray, t0, t1) {
-            Some(found) => found.t,
+            Some(found) => found,
             None => return ShapeTrace::Miss,
         },
-        None => t0,
+        // No cell known: only the parameter is used.
+        None => Candidate { t: t0, ..NO_CELL },
     };
+    let t0 = seed.t;
     match closed_form(sdf, ray, t0, t1, settings, true) {
         Some((_, 0)) => ShapeTrace::Miss,
         Some((t, _)) => ShapeTrace::Hit(t[0]),
         None => {
             let mut m = Marcher::new(sdf, lipschitz.into(), ray, t1, settings);
             m.space = space;
+            m.seed = seed;
             m.first(t0)
         }
     }
