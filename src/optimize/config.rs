@@ -23,8 +23,10 @@ pub const DEFAULT_LEARNING_RATE: f32 = 0.01;
 /// Adam's step size for grid values (scene units, at the starting resolution and iteration 0) when
 /// `learning_rate` is absent.
 pub const DEFAULT_LEARNING_RATE_GRIDS: f32 = 0.04;
-/// The learning rate's decay when `learning_rate_decay` is absent.
-pub const DEFAULT_DECAY: Decay = Decay::Cosine {
+/// The learning rate's decay when `learning_rate_decay` is absent: geometric, whose lower rates from
+/// the middle of a run on bring the shape closer to the floor its gradients' noise sets
+/// (docs/inverse-rendering.md, "The decay's shape").
+pub const DEFAULT_DECAY: Decay = Decay::Exponential {
     final_fraction: DEFAULT_LEARNING_RATE_FINAL,
 };
 /// The fraction of the learning rate left at the last iteration when `learning_rate_final` is absent.
