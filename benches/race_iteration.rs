@@ -10,8 +10,11 @@
 //! an exact distance). Targets: the target scene at 64 spp (`--targets-spp`). The loss is the race's
 //! (its image pyramid included).
 //!
-//! Prints per iteration (summed over the 6 views) the seconds of the primal renders, the loss passes,
-//! the interior, primary and secondary terms, and each as a ratio to the primal.
+//! The loss and gradient are `optimize`'s own (`Optimization::views_gradient`: the views run as many
+//! at a time as there are threads, at the image scale `optimize` takes for the grid, half size at
+//! 16³). Prints per iteration the seconds of the primal renders (one view after the other, at the same
+//! image size), of the loss and gradient and of its loss passes, interior, primary and secondary
+//! terms (their shares of its wall time), and each as a ratio to the primal.
 //!
 //! `cargo bench --bench race_iteration [-- --grid 61 | --state DIR/result.json] [-- REPS]`.
 //!
@@ -19,7 +22,7 @@
 //! the targets at 1 spp and `--no-primal` skips the primal renders (the table then has no ratios):
 //! almost all of the process's samples are then the six views' loss passes and gradients.
 
-use implicit_psdr::integrator::{DiffOptions, RenderOptions, loss_gradient, render};
+use implicit_psdr::integrator::{RenderOptions, render};
 use implicit_psdr::optimize::Optimization;
 use implicit_psdr::optimize::config::{OptimizeConfig, Target};
 use implicit_psdr::sdf::bake;
@@ -93,55 +96,38 @@ fn main() {
     let opt = Optimization::new(scene, cfg.views.clone(), targets, settings).unwrap();
     let views = opt.views_of(0);
     assert_eq!(views.len(), VIEWS);
-    let layout = implicit_psdr::integrator::GradientLayout::select(
-        &opt.scene,
-        &opt.settings.params,
-        &opt.settings.grids,
-    )
-    .unwrap();
     println!(
         "race iteration: {VIEWS} views {}x{}, {spp} spp, grid {:?} ({} values), {reps} repetitions",
         opt.scene.camera.width,
         opt.scene.camera.height,
         opt.scene.grid_values(&node).unwrap().dims,
-        layout.entries
+        opt.scene.grid_values(&node).unwrap().values.len()
     );
     // Per repetition: primal, loss pass, interior, primary, secondary, whole gradient call.
     let mut rows: Vec<[f64; 6]> = Vec::new();
     for rep in 0..reps {
         let mut row = [0.0; 6];
-        for &v in &views {
-            let scene = opt.views[v].apply(&opt.scene).unwrap();
-            let options = DiffOptions {
-                render: RenderOptions {
+        if primal {
+            for &v in &views {
+                let divisor = opt.divisor_at(rep as u32);
+                let scene = opt.views[v].apply_reduced(&opt.scene, divisor).unwrap();
+                let options = RenderOptions {
                     spp,
                     seed: (rep * 100 + 2 * v) as u64,
                     ..RenderOptions::default()
-                },
-                boundary: opt.settings.boundary,
-                ..DiffOptions::default()
-            };
-            if primal {
+                };
                 let t = Instant::now();
-                black_box(render(&scene, &options.render));
+                black_box(render(&scene, &options));
                 row[0] += t.elapsed().as_secs_f64();
             }
-            let t = Instant::now();
-            let g = loss_gradient(
-                &scene,
-                &layout,
-                &opt.targets[v],
-                opt.settings.loss.multiscale(opt.settings.loss_scales),
-                &options,
-            )
-            .unwrap();
-            row[5] += t.elapsed().as_secs_f64();
-            row[1] += g.loss_seconds;
-            for k in 0..3 {
-                row[2 + k] += g.gradient.term_seconds[k];
-            }
-            black_box(g);
         }
+        // What `optimize` runs for an iteration's views (several at once), at iteration `rep`'s seeds.
+        let t = Instant::now();
+        let g = opt.views_gradient(rep as u32, &views).unwrap();
+        row[5] = t.elapsed().as_secs_f64();
+        let s = g.stage_seconds;
+        row[1..5].copy_from_slice(&[s.loss_pass, s.interior, s.primary, s.secondary]);
+        black_box(g);
         rows.push(row);
     }
     let names = [

@@ -20,6 +20,7 @@ pub mod run;
 pub mod schedule;
 pub mod targets;
 mod views;
+mod views_gradient;
 
 pub use adam::{Adam, AdamOptions};
 pub use progress::Row;
@@ -27,12 +28,11 @@ pub use resolution::ImageScale;
 pub use run::{Observer, Outcome, Status, run};
 pub use schedule::{Decay, Ema, ResolutionPower};
 pub use views::{View, orbit};
+pub use views_gradient::ViewsGradient;
 
 use crate::error::{Error, Result};
 use crate::film::Image;
-use crate::integrator::{
-    BoundaryBudget, DiffOptions, GradientLayout, Loss, RenderOptions, loss_gradient, render,
-};
+use crate::integrator::{BoundaryBudget, DiffOptions, GradientLayout, Loss, RenderOptions, render};
 use crate::sampler::Sampler;
 use crate::scene::BlockKind;
 use crate::scene::Scene;
@@ -119,8 +119,9 @@ pub struct Iteration {
     pub seconds: f64,
     /// Samples whose gradient was dropped as non-finite.
     pub invalid_samples: u64,
-    /// Where the time went, summed over the views: the loss passes, the adjoint passes' interior,
-    /// primary and secondary terms, and the grid edits (refinement, redistancing), in seconds.
+    /// Where the time went, in seconds: the grid edits (refinement, redistancing), and the wall time
+    /// of the views shared among the loss passes and the adjoint passes' interior, primary and
+    /// secondary terms ([`ViewsGradient::stage_seconds`]).
     pub stage_seconds: StageSeconds,
 }
 
@@ -298,37 +299,15 @@ impl Optimization {
     pub fn step(&mut self) -> Result<Iteration> {
         let start = std::time::Instant::now();
         let index = self.done;
-        let mut stages = StageSeconds::default();
         self.edit_grids(index)?;
-        stages.grid_edits = start.elapsed().as_secs_f64();
+        let grid_edits = start.elapsed().as_secs_f64();
         let views = self.views_of(index);
-        let mut gradient = vec![0.0f64; self.layout.entries];
-        let mut loss = 0.0;
-        let mut invalid = 0;
-        let image_loss = self.settings.loss.multiscale(self.settings.loss_scales);
-        let divisor = self.divisor_at(index);
-        let targets = match self.reduced_targets.iter().find(|(d, _)| *d == divisor) {
-            Some((_, reduced)) => reduced,
-            None => &self.targets,
-        };
-        for &v in &views {
-            let scene = self.views[v].apply_reduced(&self.scene, divisor)?;
-            let options = self.options(index, v);
-            let g = loss_gradient(&scene, &self.layout, &targets[v], image_loss, &options)?;
-            loss += g.loss;
-            invalid += g.gradient.stats.invalid_derivatives;
-            stages.loss_pass += g.loss_seconds;
-            let [interior, primary, secondary] = g.gradient.term_seconds;
-            stages.interior += interior;
-            stages.primary += primary;
-            stages.secondary += secondary;
-            for (t, d) in gradient.iter_mut().zip(g.gradient.total()) {
-                *t += d;
-            }
-        }
-        let n = views.len() as f64;
-        loss /= n;
-        gradient.iter_mut().for_each(|g| *g /= n);
+        let ViewsGradient {
+            mut loss,
+            mut gradient,
+            invalid_samples,
+            stage_seconds,
+        } = self.views_gradient(index, &views)?;
         if self.settings.laplacian > 0.0 {
             for (block, first) in &self.layout.grids {
                 if block.kind != BlockKind::Grid {
@@ -356,8 +335,11 @@ impl Optimization {
             loss,
             gradient_norm: norm,
             seconds: start.elapsed().as_secs_f64(),
-            invalid_samples: invalid,
-            stage_seconds: stages,
+            invalid_samples,
+            stage_seconds: StageSeconds {
+                grid_edits,
+                ..stage_seconds
+            },
         })
     }
 
