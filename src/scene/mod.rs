@@ -79,10 +79,14 @@ impl Shape {
         let t = translate.value();
         let local = sdf.bounds();
         let bounds = Aabb::new(local.min + t, local.max + t);
-        let lipschitz = sdf.lipschitz_sided();
+        // The two walk a grid's patches each: at once, they take half the time of a grid edit's
+        // refresh in an optimisation.
+        let (lipschitz, empty_space) = rayon::join(
+            || sdf.lipschitz_sided(),
+            || EmptySpace::of(&sdf).map(Arc::new),
+        );
         let creased = sdf.creases().is_some();
         let convex = sdf.is_convex();
-        let empty_space = EmptySpace::of(&sdf).map(Arc::new);
         let enclosures = (empty_space.is_some()).then(|| Arc::new(EnclosureMemo::default()));
         Self {
             name: name.into(),

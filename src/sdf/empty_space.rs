@@ -119,23 +119,38 @@ impl EmptySpace {
                 let cells = data.dims.map(|n| n - 1);
                 let scale = glam::Vec3::from(cells.map(|c| c as f32)) / ext;
                 let (extended, _) = grid::extended_lattice(data);
-                let patches =
-                    grid::patch_lipschitz(data, &extended, *bbox_min, *bbox_max, level.value);
-                let straddling: Vec<bool> = patches.iter().map(|p| p.straddling).collect();
-                let curvature = grid::patch_curvature(data, &extended, *bbox_min, *bbox_max);
+                // Independent walks over the cells, in parallel.
+                let ((distance, inv_lipschitz), curvature_radius) = rayon::join(
+                    || {
+                        let patches = grid::patch_lipschitz(
+                            data,
+                            &extended,
+                            *bbox_min,
+                            *bbox_max,
+                            level.value,
+                        );
+                        let straddling: Vec<bool> = patches.iter().map(|p| p.straddling).collect();
+                        rayon::join(
+                            || chessboard_distance(&straddling, cells),
+                            || neighbourhood_inverse_bounds(&patches, cells),
+                        )
+                    },
+                    || {
+                        let curvature =
+                            grid::patch_curvature(data, &extended, *bbox_min, *bbox_max);
+                        neighbourhood_max(curvature.into_iter().map(|m| [m]).collect(), cells)
+                            .into_iter()
+                            .map(|[m]| 1.0 / m)
+                            .collect()
+                    },
+                );
                 Some(Self {
                     to_lattice: glam::Mat3::from_diagonal(scale),
                     offset: -*bbox_min * scale,
                     cells,
-                    distance: chessboard_distance(&straddling, cells),
-                    inv_lipschitz: neighbourhood_inverse_bounds(&patches, cells),
-                    curvature_radius: neighbourhood_max(
-                        curvature.into_iter().map(|m| [m]).collect(),
-                        cells,
-                    )
-                    .into_iter()
-                    .map(|[m]| 1.0 / m)
-                    .collect(),
+                    distance,
+                    inv_lipschitz,
+                    curvature_radius,
                     cell_size: (ext / glam::Vec3::from(cells.map(|c| c as f32))).min_element(),
                 })
             }
