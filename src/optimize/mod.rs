@@ -2,9 +2,10 @@
 //! match target images, with the reverse-mode gradient ([`crate::integrator::loss_gradient`]) and Adam.
 //!
 //! One iteration: a subset of the views (all by default; otherwise drawn from the seed), for each view
-//! the loss pass and the adjoint pass at the view's camera (the views in parallel, [`views_gradient`]),
-//! the mean loss and the mean gradient over those views, one Adam step per parameter (grid values and named parameters with their own learning
-//! rates), then every value is brought back into its valid range ([`Optimization::step`]).
+//! the loss pass and the adjoint pass at the view's camera (the views in parallel,
+//! [`Optimization::views_gradient`]), the mean loss and the mean gradient over those views, one Adam
+//! step per parameter (grid values and named parameters with their own learning rates), then every
+//! value is brought back into its valid range ([`Optimization::step`]).
 //!
 //! A whole run as an `OPT.json` describes it ([`config`]), with its files (`progress.csv`, the
 //! pictures, the target cache, `result.json`), is [`run()`]'s, which the `optimize` command and
