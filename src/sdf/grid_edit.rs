@@ -297,15 +297,9 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
                         }
                         stale[i] = false;
                         let v = &mut p.values;
-                        let mut near =
+                        let near =
                             [0, 1, 2].map(|a| (v[i - stride[a]].min(v[i + stride[a]]), h[a]));
-                        // A stable sort of three by value (ties keep their axis order).
-                        for (j, k) in [(0, 1), (1, 2), (0, 1)] {
-                            if near[j].0.total_cmp(&near[k].0).is_gt() {
-                                near.swap(j, k);
-                            }
-                        }
-                        let u = godunov(&near);
+                        let u = godunov(near);
                         if u < v[i] {
                             v[i] = u;
                             changed = true;
@@ -325,9 +319,15 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
     d.copy_from_slice(&p.unpadded());
 }
 
-/// The upwind solution `u` of `Σ_k ((u − a_k)⁺ / h_k)² = 1` for neighbour values `a_k` sorted
-/// ascending, using as many axes as stay below `u`.
-fn godunov(near: &[(f32, f32); 3]) -> f32 {
+/// The upwind solution `u` of `Σ_k ((u − a_k)⁺ / h_k)² = 1` for each axis's smaller neighbour value
+/// `a_k` and spacing `h_k`, using as many axes as stay below `u`.
+fn godunov(mut near: [(f32, f32); 3]) -> f32 {
+    // A stable sort of three by value (ties keep their axis order).
+    for (j, k) in [(0, 1), (1, 2), (0, 1)] {
+        if near[j].0.total_cmp(&near[k].0).is_gt() {
+            near.swap(j, k);
+        }
+    }
     let (a0, h0) = near[0];
     if !a0.is_finite() {
         return f32::INFINITY;
@@ -377,7 +377,7 @@ mod tests {
                                 continue;
                             }
                             let c = [x, y, z];
-                            let mut near = [0, 1, 2].map(|a| {
+                            let near = [0, 1, 2].map(|a| {
                                 let mut m = f32::INFINITY;
                                 for side in [-1isize, 1] {
                                     let k = c[a] as isize + side;
@@ -389,12 +389,7 @@ mod tests {
                                 }
                                 (m, h[a])
                             });
-                            for (j, k) in [(0, 1), (1, 2), (0, 1)] {
-                                if near[j].0.total_cmp(&near[k].0).is_gt() {
-                                    near.swap(j, k);
-                                }
-                            }
-                            let u = godunov(&near);
+                            let u = godunov(near);
                             if u < d[i] {
                                 d[i] = u;
                                 changed = true;
