@@ -39,16 +39,22 @@ pub struct EmptySpace {
     cells: [usize; 3],
     /// Per cell (x fastest), the chessboard distance to the nearest straddling cell, saturated at 255.
     distance: Vec<u8>,
-    /// Per cell, the inverse Lipschitz bounds `[outside, inside]` over the cell and its 26 neighbours:
-    /// valid within one cell of any point of the cell.
-    inv_lipschitz: Vec<[f32; 2]>,
-    /// Per cell, `1/M` for the bound `M` of the spline's second derivative along any unit direction
-    /// over the cell and its 26 neighbours (a length; infinite where the spline is linear there):
-    /// valid within one cell of any point of the cell, inside the grid box.
-    curvature_radius: Vec<f32>,
+    /// Per cell, what holds over the cell and its 26 neighbours (valid within one cell of any point
+    /// of the cell), side by side so that a straddling cell's lookup reads one place.
+    bounds: Vec<CellBounds>,
     /// The shortest edge of a cell in the shape's frame: how far from a point the neighbourhood's
     /// bounds certainly hold.
     pub cell_size: f32,
+}
+
+/// What holds over a cell and its 26 neighbours ([`EmptySpace`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+struct CellBounds {
+    /// The inverse Lipschitz bounds `[outside, inside]`.
+    inv_lipschitz: [f32; 2],
+    /// `1/M` for the bound `M` of the spline's second derivative along any unit direction (a
+    /// length; infinite where the spline is linear there), inside the grid box.
+    curvature_radius: f32,
 }
 
 /// What the lattice cells a box touches hold ([`EmptySpace::box_cells`]).
@@ -96,8 +102,11 @@ impl EmptySpace {
                     offset: inner.to_lattice * child_offset + inner.offset,
                     cell_size: frame.from_child_length(inner.cell_size),
                     // Second derivatives scale as 1/length: their radius as a length.
-                    curvature_radius: (inner.curvature_radius.iter())
-                        .map(|&r| frame.from_child_length(r))
+                    bounds: (inner.bounds.iter())
+                        .map(|b| CellBounds {
+                            curvature_radius: frame.from_child_length(b.curvature_radius),
+                            ..*b
+                        })
                         .collect(),
                     ..inner
                 })
@@ -141,16 +150,21 @@ impl EmptySpace {
                         neighbourhood_max(curvature.into_iter().map(|m| [m]).collect(), cells)
                             .into_iter()
                             .map(|[m]| 1.0 / m)
-                            .collect()
+                            .collect::<Vec<f32>>()
                     },
                 );
+                let bounds = (inv_lipschitz.into_iter().zip(curvature_radius))
+                    .map(|(inv_lipschitz, curvature_radius)| CellBounds {
+                        inv_lipschitz,
+                        curvature_radius,
+                    })
+                    .collect();
                 Some(Self {
                     to_lattice: glam::Mat3::from_diagonal(scale),
                     offset: -*bbox_min * scale,
                     cells,
                     distance,
-                    inv_lipschitz,
-                    curvature_radius,
+                    bounds,
                     cell_size: (ext / glam::Vec3::from(cells.map(|c| c as f32))).min_element(),
                 })
             }
@@ -257,11 +271,15 @@ impl EmptySpace {
             let parallel = ray.d.cmpeq(glam::Vec3::ZERO);
             let leave = glam::Vec3::select(parallel, glam::Vec3::INFINITY, across).min_element();
             if k == 0 {
+                let CellBounds {
+                    inv_lipschitz,
+                    curvature_radius,
+                } = self.bounds[index];
                 return Some(Candidate {
                     t,
                     until: leave,
-                    inv_lipschitz: self.inv_lipschitz[index],
-                    curvature_radius: self.curvature_radius[index],
+                    inv_lipschitz,
+                    curvature_radius,
                 });
             }
             // Rounding can put `leave` at or behind `t` on a cell's face: move on by a sliver.
