@@ -1,8 +1,9 @@
 //! Camera rays eight at a time (`Scene::intersect_packet`) against the scalar query, one ray at a time:
 //! the same first hit, bit for bit (parameter, point, normal, surface), on every example scene's camera
-//! rays and on random rays through scenes of closed-form shapes, shapes without one, emitters and a
-//! plane: hits, misses, grazes of spheres, rays along axes, rays from inside shapes and from their
-//! surfaces, near the origin and far from it, large and small. The packet must also answer most of a
+//! rays and on random rays through scenes of closed-form shapes (spheres, boxes, cylinders, planes,
+//! similarity transforms of them), shapes without one, emitters and a plane: hits, misses, grazes of
+//! spheres, rays along axes, along a cylinder's axis and in its caps' planes, rays from inside shapes
+//! and from their surfaces, near the origin and far from it, large and small. The packet must also answer most of a
 //! simple scene's camera rays in its lanes (else it is only the scalar query with extra work).
 
 mod common;
@@ -154,6 +155,38 @@ fn mixed_scene(offset: Vec3, scale: f32, eye: Vec3, plane: bool) -> Scene {
             p([-0.8, 1.3, -0.4]),
             s(0.35)
         ),
+        format!(
+            r#"{{"name": "turned", "sdf": {{"type": "transform", "translate": {}, "rotate": {{"axis": [0.3, 1, 0.2], "angle": 37}}, "scale": {},
+                "child": {{"type": "box", "center": [0.1, 0, 0], "half_size": [0.5, 0.3, 0.4], "rounding": 0.1}}}}}}"#,
+            p([2.4, 0.2, -1.0]),
+            s(1.3)
+        ),
+        format!(
+            r#"{{"name": "turned_ball", "sdf": {{"type": "transform", "translate": {}, "rotate": {{"axis": [1, 0, 0], "angle": -70}}, "scale": {},
+                "child": {{"type": "sphere", "center": [0, 0.2, 0], "radius": 0.3}}}}}}"#,
+            p([-2.4, -0.4, -1.4]),
+            s(0.9)
+        ),
+        format!(
+            r#"{{"name": "can", "sdf": {{"type": "cylinder", "center": {}, "axis": [0, 1, 0], "radius": {}, "half_height": {}, "rounding": 0}}}}"#,
+            p([CAN[0], CAN[1], CAN[2]]),
+            s(0.4),
+            s(0.5)
+        ),
+        format!(
+            r#"{{"name": "tilted_can", "sdf": {{"type": "cylinder", "center": {}, "axis": [0.6, 0.8, 0], "radius": {}, "half_height": {}, "rounding": {}}}}}"#,
+            p([-0.6, -1.0, 2.0]),
+            s(0.35),
+            s(0.3),
+            s(0.1)
+        ),
+        format!(
+            r#"{{"name": "turned_can", "sdf": {{"type": "transform", "translate": {}, "rotate": {{"axis": [0, 0, 1], "angle": 90}}, "scale": {},
+                "child": {{"type": "transform", "translate": [0, 0.2, 0], "rotate": {{"axis": [0, 1, 0], "angle": 15}}, "scale": 0.5,
+                    "child": {{"type": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 1], "radius": 0.6, "half_height": 0.5, "rounding": 0.05}}}}}}}}"#,
+            p([0.9, 1.9, 1.6]),
+            s(1.0)
+        ),
     ];
     if plane {
         shapes.push(format!(
@@ -186,6 +219,10 @@ fn mixed_scene(offset: Vec3, scale: f32, eye: Vec3, plane: bool) -> Scene {
     parse(&json, Path::new(".")).unwrap()
 }
 
+/// Where `mixed_scene`'s upright cylinder stands (relative, unscaled): rays along its axis and in its
+/// caps' planes are among the random rays.
+const CAN: [f32; 3] = [2.0, -1.0, 1.2];
+
 /// Random rays of every kind through `scene`, scaled by `scale` around `offset`, in packets of random
 /// sizes; returns how many rays were compared.
 fn random_rays_agree(scene: &Scene, offset: Vec3, scale: f32, seed: u64) -> usize {
@@ -199,7 +236,8 @@ fn random_rays_agree(scene: &Scene, offset: Vec3, scale: f32, seed: u64) -> usiz
         let mut spreads = Vec::new();
         for _ in 0..n {
             let o = offset + rng.point(5.0) * scale;
-            let kind = (rng.next() * 7.0) as u32;
+            let mut o_override = None;
+            let kind = (rng.next() * 9.0) as u32;
             let d = match kind {
                 // At a random point near the shapes.
                 0 | 1 => ((offset + rng.point(2.0) * scale) - o).normalize(),
@@ -220,9 +258,27 @@ fn random_rays_agree(scene: &Scene, offset: Vec3, scale: f32, seed: u64) -> usiz
                 }
                 // Along an axis.
                 3 => [Vec3::X, Vec3::NEG_Y, Vec3::Z][(rng.next() * 3.0) as usize % 3],
+                // Parallel to the upright cylinder's axis (within its radius half the time), or in
+                // the plane of one of its caps.
+                6 => {
+                    let up = rng.next() < 0.5;
+                    if rng.next() < 0.5 {
+                        let across = Vec3::new(rng.next() - 0.5, 0.0, rng.next() - 0.5) * 0.7;
+                        let height = if up { -3.0 } else { 3.0 };
+                        let from = Vec3::from(CAN) + across + Vec3::Y * height;
+                        o_override = Some(offset + from * scale);
+                    }
+                    if up { Vec3::Y } else { Vec3::NEG_Y }
+                }
+                7 => {
+                    let cap = offset + (Vec3::from(CAN) + Vec3::Y * 0.5) * scale;
+                    let to = Vec3::new(cap.x - o.x, 0.0, cap.z - o.z);
+                    o_override = Some(Vec3::new(o.x, cap.y, o.z));
+                    to.try_normalize().unwrap_or(Vec3::X)
+                }
                 _ => rng.direction(),
             };
-            let mut ray = Ray::new(o, d);
+            let mut ray = Ray::new(o_override.unwrap_or(o), d);
             // Some rays start on a surface: where an earlier ray hit it, leaving in a random direction.
             if kind == 4
                 && let Intersection::Hit(h) = scene.intersect_resolving(&ray, f32::INFINITY, 0.0)

@@ -7,14 +7,16 @@
 //! then every shape's interval along the ray (its bounds grown by the tracer's margin, as
 //! [`super::shape_list`] computes them for four boxes of one ray, here for eight rays of one box;
 //! lanes whose interval the registers cannot vouch for take the shape's own test), then the closed
-//! form of the shapes that have one in lanes (spheres, boxes with rounded edges, planes), with the
-//! tracer's own arithmetic in the same order, so each lane's crossing is the scalar crossing's bits.
+//! form of the shapes that have one in lanes (spheres, boxes and cylinders with rounded edges,
+//! planes, similarity transforms of these: the rays mapped into the child's frame by
+//! [`crate::sdf::Similarity::to_child_ray_lanes`]), with the tracer's own arithmetic in the same
+//! order, so each lane's crossing is the scalar crossing's bits.
 //!
 //! The scalar tracer takes a closed form only where it is certain ([`crate::trace::first_crossing`]):
 //! the crossing is exact (not on a rounded edge), not within a tolerance of where the ray enters the
 //! bounds (there it evaluates the field to tell the side), the two crossings of a pair farther apart
 //! than the tracer resolves, the ray outside the solid at its start. Where any of these fails, or the
-//! shape has no closed form in lanes (grids, CSG, transforms), or the arithmetic gave a NaN or an
+//! shape has no closed form in lanes (grids, CSG, transforms of those), or the arithmetic gave a NaN or an
 //! infinity, the lane *falls back*: it is answered by the scalar query, whole. The others keep the
 //! nearest crossing. The scalar query traces shapes in the order the ray enters their bounds and the
 //! packet in index order; both keep the nearest crossing, so they agree but on a tie between two
@@ -140,7 +142,8 @@ impl LaneCrossings {
     fn exists(sdf: &Sdf) -> bool {
         match sdf {
             Sdf::Named { child, .. } => Self::exists(child),
-            Sdf::Sphere { .. } | Sdf::Box { .. } | Sdf::Plane { .. } => true,
+            Sdf::Transform { child, .. } => Self::exists(child),
+            Sdf::Sphere { .. } | Sdf::Box { .. } | Sdf::Plane { .. } | Sdf::Cylinder { .. } => true,
             _ => false,
         }
     }
@@ -164,6 +167,28 @@ impl LaneCrossings {
                 let q = [o[0] - c.x, o[1] - c.y, o[2] - c.z];
                 Some(Self::cuboid(&q, d, half_size.value(), rounding.value))
             }
+            Sdf::Cylinder {
+                center,
+                axis,
+                radius,
+                half_height,
+                rounding,
+            } => {
+                let c = center.value();
+                let f = [o[0] - c.x, o[1] - c.y, o[2] - c.z];
+                Some(Self::cylinder(
+                    &f,
+                    d,
+                    *axis,
+                    [radius.value, half_height.value],
+                    rounding.value,
+                ))
+            }
+            Sdf::Transform { .. } => {
+                let (frame, child) = sdf.frame()?;
+                let (o, d) = frame.to_child_ray_lanes(*o, *d);
+                Self::of(child, &o, &d)
+            }
             Sdf::Plane { normal, offset } => {
                 let n = [normal.x, normal.y, normal.z].map(f32x8::splat);
                 let height = dot(&n, o) - f32x8::splat(offset.value);
@@ -183,8 +208,9 @@ impl LaneCrossings {
         }
     }
 
-    /// `ball_roots` of `line_crossings`, lane by lane.
-    fn ball(f: &[f32x8; 3], d: &[f32x8; 3], r: f32) -> Self {
+    /// `ball_roots` of `line_crossings`, lane by lane: the roots, the lanes where they exist (the
+    /// line crosses), and those where the scalar function gives no answer (`h²` not a number).
+    fn ball_roots(f: &[f32x8; 3], d: &[f32x8; 3], r: f32) -> ([f32x8; 2], u32, u32) {
         let r = f32x8::splat(r);
         let a = dot(d, d);
         let b = -dot(f, d);
@@ -198,13 +224,66 @@ impl LaneCrossings {
         let f_len = dot(f, f).sqrt();
         let c = (f_len - r) * (f_len + r);
         let (near, far) = (c / (a * q), q);
-        let t = [near.min(far), near.max(far)];
+        ([near.min(far), near.max(far)], hit, nan)
+    }
+
+    /// A sphere's crossings (`line_crossings`), lane by lane.
+    fn ball(f: &[f32x8; 3], d: &[f32x8; 3], r: f32) -> Self {
+        let (t, hit, nan) = Self::ball_roots(f, d, r);
         let invalid = nan | (hit & !(finite(t[0]) & finite(t[1])));
         Self {
             t,
             some: hit,
             two: hit,
             exact_first: ALL,
+            inside_before: 0,
+            invalid,
+        }
+    }
+
+    /// `cylinder_crossings` of `line_crossings`, lane by lane (`f` from the centre, unit `axis`,
+    /// `[radius, half height]`). The lanes where the scalar function gives no answer, and those of
+    /// a line parallel to the axis (which it decides apart), are marked invalid: the scalar query
+    /// answers them.
+    fn cylinder(
+        f: &[f32x8; 3],
+        d: &[f32x8; 3],
+        axis: glam::Vec3,
+        [r, half]: [f32; 2],
+        rounding: f32,
+    ) -> Self {
+        let k = [axis.x, axis.y, axis.z].map(f32x8::splat);
+        let (h0, dh) = (dot(f, &k), dot(d, &k));
+        let rf: [f32x8; 3] = std::array::from_fn(|a| f[a] - h0 * k[a]);
+        let rd: [f32x8; 3] = std::array::from_fn(|a| d[a] - dh * k[a]);
+        let half_x = f32x8::splat(half);
+        let (ta, tb) = ((-half_x - h0) / dh, (half_x - h0) / dh);
+        let caps_nan = (ta.is_nan() | tb.is_nan()).to_bitmask();
+        let (cap_in, cap_out) = (ta.min(tb), ta.max(tb));
+        let parallel =
+            (rd[0].simd_eq(f32x8::ZERO) & rd[1].simd_eq(f32x8::ZERO) & rd[2].simd_eq(f32x8::ZERO))
+                .to_bitmask();
+        let ([side_in, side_out], side_hit, side_nan) = Self::ball_roots(&rf, &rd, r);
+        let (t_in, t_out) = (cap_in.max(side_in), cap_out.min(side_out));
+        let hit = side_hit & t_in.simd_lt(t_out).to_bitmask();
+        // Exact on a cap within its flat part, or on the side within its straight part.
+        let on_cap = cap_in.simd_ge(side_in).to_bitmask();
+        let p: [f32x8; 3] = std::array::from_fn(|a| rf[a] + t_in * rd[a]);
+        let flat_cap = dot(&p, &p)
+            .sqrt()
+            .simd_le(f32x8::splat(r - rounding))
+            .to_bitmask();
+        let straight_side = (h0 + t_in * dh)
+            .abs()
+            .simd_le(f32x8::splat(half - rounding))
+            .to_bitmask();
+        let exact_first = (on_cap & flat_cap) | (!on_cap & straight_side);
+        let invalid = caps_nan | parallel | side_nan | (hit & !(finite(t_in) & finite(t_out)));
+        Self {
+            t: [t_in, t_out],
+            some: hit & !invalid,
+            two: hit & !invalid,
+            exact_first,
             inside_before: 0,
             invalid,
         }

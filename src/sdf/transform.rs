@@ -16,17 +16,30 @@ use crate::scalar::{Param, Param3, Scalar};
 /// `v c + (k × v) s + k (k·v)(1 − c)`. Pass `−s` for the inverse rotation.
 #[inline(always)]
 fn rotate<S: Scalar>(v: Vec3<S>, k: glam::Vec3, c: S, s: S) -> Vec3<S> {
-    let kxv = Vec3::new(
-        v.z * k.y - v.y * k.z,
-        v.x * k.z - v.z * k.x,
-        v.y * k.x - v.x * k.y,
-    );
-    let kv = v.dot_f32(k) * (S::one() - c);
-    Vec3::new(
-        v.x * c + kxv.x * s + kv * k.x,
-        v.y * c + kxv.y * s + kv * k.y,
-        v.z * c + kxv.z * s + kv * k.z,
-    )
+    let [x, y, z] = rotate_components([v.x, v.y, v.z], k, c, s, S::one());
+    Vec3::new(x, y, z)
+}
+
+/// [`rotate`]'s formula for coordinates of any type `T` and a cosine and sine of type `C` (`1` is
+/// `one`): one formula for a scalar type (`T = C`) and for eight rays' coordinates in SIMD lanes
+/// with the `f32` cosine and sine, so that all give the same bits.
+#[inline(always)]
+fn rotate_components<T, C>([x, y, z]: [T; 3], k: glam::Vec3, c: C, s: C, one: C) -> [T; 3]
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f32, Output = T>
+        + std::ops::Mul<C, Output = T>,
+    C: Copy + std::ops::Sub<Output = C>,
+{
+    let kxv = [z * k.y - y * k.z, x * k.z - z * k.x, y * k.x - x * k.y];
+    let kv = (x * k.x + y * k.y + z * k.z) * (one - c);
+    [
+        x * c + kxv[0] * s + kv * k.x,
+        y * c + kxv[1] * s + kv * k.y,
+        z * c + kxv[2] * s + kv * k.z,
+    ]
 }
 
 /// The cosine and sine of a transform's angle, computed once when the node is built: the tracer
@@ -353,6 +366,28 @@ impl Similarity<f32> {
             back(ray.o - glam::Vec3::from(self.translate)) / s,
             back(ray.d) / s,
         )
+    }
+
+    /// [`Similarity::to_child_ray`] of rays whose coordinates are of type `T` (eight rays in the
+    /// lanes of `wide::f32x8`): the same operations in the same order, so each lane's ray is that
+    /// ray's [`Similarity::to_child_ray`] bit for bit.
+    pub fn to_child_ray_lanes<T>(&self, o: [T; 3], d: [T; 3]) -> ([T; 3], [T; 3])
+    where
+        T: Copy
+            + std::ops::Add<Output = T>
+            + std::ops::Sub<Output = T>
+            + std::ops::Sub<f32, Output = T>
+            + std::ops::Mul<f32, Output = T>
+            + std::ops::Div<f32, Output = T>,
+    {
+        let back = |v: [T; 3]| match self.rotation {
+            Some(r) => rotate_components(v, self.axis, r.cos, r.inverse_sin, 1.0),
+            None => v,
+        };
+        let s = self.scale();
+        let t = self.translate;
+        let o = back([o[0] - t.x, o[1] - t.y, o[2] - t.z]);
+        (o.map(|v| v / s), back(d).map(|v| v / s))
     }
 
     /// A ray of the child's frame out into the parent's: `o = t + s R o'`, `d = s R d'`, the same
