@@ -150,9 +150,16 @@ fn neighbourhood_bounds_hold_within_a_cell() {
     assert!(tightest > 0.8, "largest slope / bound {tightest}");
 }
 
+/// Under a transform, and without one (where the marcher takes the slope from the same pass over the
+/// taps as the value wherever a search starts or resumes).
 #[test]
 fn tracing_finds_the_same_hits_with_and_without_skipping() {
-    let shape = blob();
+    for shape in [blob(), aligned_blob()] {
+        same_hits_with_and_without_skipping(shape);
+    }
+}
+
+fn same_hits_with_and_without_skipping(shape: Shape) {
     let mut plain = shape.clone();
     plain.empty_space = None;
     let settings = TraceSettings {

@@ -389,6 +389,16 @@ impl Sdf {
         self.grid_jet::<false>(p).map(|(v, g, _)| (v, g))
     }
 
+    /// Whether [`Sdf::value_and_gradient`]'s value, where it answers, is [`Sdf::eval_f32`]'s bit for
+    /// bit: a grid under names only (a transform's maps round differently).
+    pub fn value_and_gradient_is_exact(&self) -> bool {
+        match self {
+            Sdf::Grid { .. } => true,
+            Sdf::Named { child, .. } => child.value_and_gradient_is_exact(),
+            _ => false,
+        }
+    }
+
     /// The gradient of the field of the faces ([`Sdf::eval_faces`]): [`Sdf::gradient`] except next
     /// to a sharp primitive's edges (outside it, within the distance to them), where it is the nearest
     /// face's.

@@ -222,6 +222,8 @@ struct Side {
     t: f32,
     /// `sign · φ` there (`≥ 0`).
     g: f32,
+    /// The slope `∇φ · d` there, when the evaluation gave it ([`Marcher::phi_for_steps`]).
+    slope: Option<f32>,
 }
 
 /// Outcome of one crossing search.
@@ -276,6 +278,9 @@ struct Marcher<'a> {
     steps_left: u32,
     /// Evaluations spent refining brackets (not charged to the step budget; kept for tests).
     refine_evals: u32,
+    /// Whether the field's value with its slope ([`Sdf::value_and_gradient`]) is its value bit for
+    /// bit ([`Sdf::value_and_gradient_is_exact`]).
+    exact_jet: bool,
 }
 
 impl<'a> Marcher<'a> {
@@ -305,6 +310,7 @@ impl<'a> Marcher<'a> {
             origin_magnitude: ray.o.abs().max_element(),
             steps_left: settings.max_steps,
             refine_evals: 0,
+            exact_jet: sdf.value_and_gradient_is_exact(),
         }
     }
 
@@ -354,12 +360,24 @@ impl<'a> Marcher<'a> {
         }
     }
 
-    /// The side the ray is on at `t` (where `φ = phi`). On the surface (`|φ| ≤ eps/100`, e.g. a point the
+    /// `φ` at `t`, with its slope along the ray where the second-order steps may need it next (a grid
+    /// with its empty-space map) and one pass over the grid's taps gives both, the value bit for bit
+    /// [`Marcher::phi`]'s: where a search starts or resumes (the first step there takes the slope).
+    #[inline]
+    fn phi_for_steps(&mut self, t: f32) -> (f32, Option<f32>) {
+        if self.exact_jet && self.space.is_some() {
+            self.phi_slope(t)
+        } else {
+            (self.phi(t), None)
+        }
+    }
+
+    /// The side the ray is on at `t` (where `φ = phi`, with its slope `slope` if known). On the surface (`|φ| ≤ eps/100`, e.g. a point the
     /// tracer returned) the side is the one the ray moves into: probes at `t + eps, t + 2 eps, …` up to
     /// `64 eps` until `|φ|` exceeds the on-surface level, and marching resumes from that probe. This is
     /// what makes a tangent line started at its tangent point skip it: there `φ ≈ δ²κ/2` is below the
     /// float noise for the first few probes.
-    fn side(&mut self, t: f32, phi: f32) -> Side {
+    fn side(&mut self, t: f32, phi: f32, slope: Option<f32>) -> Side {
         let sign_of = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
         let (eps, on_surface) = (self.eps(t), self.on_surface(t));
         if phi.abs() > on_surface {
@@ -368,6 +386,7 @@ impl<'a> Marcher<'a> {
                 sign,
                 t,
                 g: sign * phi,
+                slope,
             };
         }
         let mut delta = eps;
@@ -375,15 +394,17 @@ impl<'a> Marcher<'a> {
             sign: sign_of(phi),
             t,
             g: phi.abs(),
+            slope,
         };
         while delta <= MAX_CREEP * eps && last.t < self.t1 {
             let tp = (t + delta.max(min_progress(t))).min(self.t1);
-            let p = self.phi(tp);
+            let (p, slope) = self.phi_for_steps(tp);
             let sign = sign_of(p);
             last = Side {
                 sign,
                 t: tp,
                 g: sign * p,
+                slope,
             };
             if p.abs() > on_surface {
                 break;
@@ -412,7 +433,7 @@ impl<'a> Marcher<'a> {
         let mut cell = if seed.t == t { seed } else { NO_CELL };
         let side = usize::from(sign < 0.0);
         // The slope of `g` along the ray at `t`, when the evaluation there gave it.
-        let mut slope: Option<f32> = None;
+        let mut slope: Option<f32> = from.slope.map(|s| sign * s);
         loop {
             // Also stops on a NaN parameter.
             if t.partial_cmp(&self.t1) != Some(std::cmp::Ordering::Less) {
@@ -430,10 +451,11 @@ impl<'a> Marcher<'a> {
                 };
                 cell = found;
                 if found.t > t {
-                    let g_next = sign * self.phi(found.t);
+                    let (phi_next, slope_next) = self.phi_for_steps(found.t);
+                    let g_next = sign * phi_next;
                     if g_next > 0.0 {
                         (t, g) = (found.t, g_next);
-                        slope = None;
+                        slope = slope_next.map(|s| sign * s);
                         previous = None;
                         creep = self.eps(t);
                         continue;
@@ -496,7 +518,7 @@ impl<'a> Marcher<'a> {
                 continue;
             }
             let (hit, beyond, g_beyond) = self.refine(sign, t, g, t_next, g_next);
-            let next = self.side(beyond, sign * g_beyond);
+            let next = self.side(beyond, sign * g_beyond, None);
             // A crossing right at `t1` cannot be probed beyond: keep it.
             let undecided_at_end = next.t >= self.t1 && next.g <= self.on_surface(next.t);
             if next.sign != sign || undecided_at_end {
@@ -506,7 +528,7 @@ impl<'a> Marcher<'a> {
             from = next;
             t = from.t;
             g = from.g;
-            slope = None;
+            slope = from.slope.map(|s| sign * s);
             creep = self.eps(t);
             previous = None;
         }
@@ -653,11 +675,11 @@ impl<'a> Marcher<'a> {
             return None;
         }
         self.steps_left = self.budget(t0);
-        let phi = self.phi(t0);
+        let (phi, slope) = self.phi_for_steps(t0);
         if phi.is_nan() {
             return None;
         }
-        Some(self.side(t0, phi))
+        Some(self.side(t0, phi, slope))
     }
 }
 
@@ -902,5 +924,64 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// On a grid under names only, a search that starts or resumes takes the slope from the same
+    /// pass over the taps as the value; the steps are then those of computing it afresh, bit for
+    /// bit: every crossing and every budget the same, on rays from afar and rays leaving the surface
+    /// (where the first step takes the slope), with and without the carried slopes.
+    #[test]
+    fn carried_slopes_take_the_same_steps() {
+        let lobes = Sdf::union(vec![
+            Sdf::sphere([-0.4, 0.0, 0.1], 0.6),
+            Sdf::sphere([0.5, 0.2, 0.0], 0.45),
+        ]);
+        let (lo, hi) = (Vec3::new(-1.2, -1.0, -1.0), Vec3::new(1.2, 1.0, 1.0));
+        let grid = crate::sdf::Sdf::named(
+            "blob",
+            Sdf::grid(crate::sdf::bake(&lobes, lo, hi, 25), lo, hi).expect("a valid grid"),
+        );
+        assert!(grid.value_and_gradient_is_exact());
+        let space = EmptySpace::of(&grid).expect("the surface stays in the box");
+        let lipschitz = grid.lipschitz_sided();
+        let settings = TraceSettings {
+            eps: 1e-4,
+            ..TraceSettings::default()
+        };
+        let mut rng = crate::sampler::Sampler::new(3, 0, 9, 0);
+        let mut direction = || {
+            let u = rng.next_2d();
+            let z = 1.0 - 2.0 * u.x;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * u.y;
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        };
+        let trace = |ray: &Ray, carried: bool| {
+            let mut m = Marcher::new(&grid, lipschitz, ray, 10.0, &settings);
+            m.space = Some((&space, space.lattice_ray(ray)));
+            m.exact_jet = carried;
+            let (hits, out) = m.all(0.0);
+            (
+                hits.iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+                out,
+                m.steps_left,
+            )
+        };
+        let mut leaving = 0;
+        for _ in 0..3000 {
+            let o = direction() * 3.0;
+            let mut ray = Ray::new(o, (direction() * 0.5 - o).normalize());
+            let (hits, _, _) = trace(&ray, true);
+            if let Some(&t) = hits.first() {
+                // From the first hit, out into the hemisphere of its normal.
+                let p = ray.at(f32::from_bits(t));
+                let n = grid.normal(p);
+                let w = direction();
+                ray = Ray::new(p, if w.dot(n) < 0.0 { -w } else { w });
+                leaving += 1;
+            }
+            assert_eq!(trace(&ray, true), trace(&ray, false), "ray {ray:?}");
+        }
+        assert!(leaving > 1000, "{leaving} rays leaving the surface");
     }
 }
