@@ -16,8 +16,8 @@
 //! the crossing is exact (not on a rounded edge), not within a tolerance of where the ray enters the
 //! bounds (there it evaluates the field to tell the side), the two crossings of a pair farther apart
 //! than the tracer resolves, the ray outside the solid at its start. Where any of these fails, or the
-//! shape has no closed form in lanes (grids, CSG, transforms of those), or the arithmetic gave a NaN or an
-//! infinity, the lane *falls back*: it is answered by the scalar query, whole. The others keep the
+//! shape has no closed form in lanes (grids, CSG, transforms of those), or the arithmetic gave a NaN
+//! or an infinity, the lane *falls back*: it is answered by the scalar query, whole. The others keep the
 //! nearest crossing. The scalar query traces shapes in the order the ray enters their bounds and the
 //! packet in index order; both keep the nearest crossing, so they agree but on a tie between two
 //! shapes at the very same parameter (which the order decides), and a lane with such a tie falls back

@@ -36,7 +36,9 @@
 //! from the tolerance, about 19 evaluations to leave the cells around the surface on the race's grid
 //! (31³), against about 10 with the parabola; a ray grazing the surface gets Newton-like steps
 //! `g/|s|` instead of `g/L`. After such a step the next point is evaluated with its gradient (the
-//! grid's value and gradient from one pass over its taps), which the next step needs.
+//! grid's value and gradient from one pass over its taps), which the next step needs; so is the point
+//! where a search starts or resumes, on a grid without transforms (whose value from that pass is the
+//! value's bits).
 //!
 //! # Closed forms
 //!
@@ -372,11 +374,11 @@ impl<'a> Marcher<'a> {
         }
     }
 
-    /// The side the ray is on at `t` (where `φ = phi`, with its slope `slope` if known). On the surface (`|φ| ≤ eps/100`, e.g. a point the
-    /// tracer returned) the side is the one the ray moves into: probes at `t + eps, t + 2 eps, …` up to
-    /// `64 eps` until `|φ|` exceeds the on-surface level, and marching resumes from that probe. This is
-    /// what makes a tangent line started at its tangent point skip it: there `φ ≈ δ²κ/2` is below the
-    /// float noise for the first few probes.
+    /// The side the ray is on at `t` (where `φ = phi`, with its slope `slope` if known). On the
+    /// surface (`|φ| ≤ eps/100`, e.g. a point the tracer returned) the side is the one the ray moves
+    /// into: probes at `t + eps, t + 2 eps, …` up to `64 eps` until `|φ|` exceeds the on-surface
+    /// level, and marching resumes from that probe. This is what makes a tangent line started at its
+    /// tangent point skip it: there `φ ≈ δ²κ/2` is below the float noise for the first few probes.
     fn side(&mut self, t: f32, phi: f32, slope: Option<f32>) -> Side {
         let sign_of = |v: f32| if v < 0.0 { -1.0 } else { 1.0 };
         let (eps, on_surface) = (self.eps(t), self.on_surface(t));
