@@ -13,9 +13,9 @@
 //! the same order as a merge of every entry, without clearing and adding a grid's worth of zeros per
 //! item (at 61³, 227k entries for each of an image's rows).
 //!
-//! The buffers outlive their film: a finished film leaves its zeroed buffers to the next film of the
-//! same length (an optimisation's next view or term), which would otherwise take fresh pages from
-//! the system for each (at 61³, eight buffers of 0.9 MB per film, three films per view).
+//! The zeroed buffers go back to one pool shared by every film, so that the next item, or the next
+//! film of the same length (an optimisation's next view or term), takes one instead of fresh pages
+//! from the system (at 61³, eight buffers of 0.9 MB per film, three films per view).
 //!
 //! **Pixels of zero adjoint.** A share for a pixel whose adjoint is zero adds nothing, so a camera
 //! sample whose own pixel and splat footprint all have zero adjoint contributes exactly nothing
@@ -32,12 +32,21 @@ use std::sync::{Arc, Mutex};
 /// Two derivative directions: a pixel filter's value with its partials along x and y.
 type Dual2 = DualN<2>;
 
-/// Zeroed item buffers left by finished films ([`AdjointFilm`]'s `Drop`), for the next films.
+/// Zeroed item buffers returned by the films' merges, for the next items of any film.
 static SPARE_BUFFERS: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 
 /// How many spare buffers are kept at most, per thread: a film holds one per item in flight, up to
 /// its wave of 4 per thread, and an optimisation runs a few views' films at once.
 const SPARE_BUFFERS_PER_THREAD: usize = 8;
+
+/// Returns a buffer, all zero again, to the pool, unless the pool is full.
+fn spare_buffer(buffer: Vec<f32>) {
+    if let Ok(mut spare) = SPARE_BUFFERS.lock()
+        && spare.len() < SPARE_BUFFERS_PER_THREAD * rayon::current_num_threads()
+    {
+        spare.push(buffer);
+    }
+}
 
 /// A zeroed buffer of `entries` values: a spare one if there is one of that length (spares of
 /// another length, left by films of another layout, are dropped), else a new one.
@@ -63,8 +72,6 @@ pub struct AdjointFilm<'a> {
     pub invalid: u64,
     /// Per pixel, whether its camera samples can reach a pixel of non-zero adjoint (`None`: all).
     needed: Option<Arc<[bool]>>,
-    /// Zeroed item buffers of `entries` values, returned by the merge for the next items.
-    buffers: Mutex<Vec<Vec<f32>>>,
 }
 
 /// One work item of an [`AdjointFilm`].
@@ -103,7 +110,6 @@ impl<'a> AdjointFilm<'a> {
             gradient: vec![0.0; entries],
             invalid: 0,
             needed: None,
-            buffers: Mutex::new(Vec::new()),
         }
     }
 
@@ -143,18 +149,6 @@ impl<'a> AdjointFilm<'a> {
     }
 }
 
-impl Drop for AdjointFilm<'_> {
-    /// Leaves the film's buffers, all zero again after their merges, to the next films.
-    fn drop(&mut self) {
-        let buffers = std::mem::take(self.buffers.get_mut().unwrap_or_else(|e| e.into_inner()));
-        if let Ok(mut spare) = SPARE_BUFFERS.lock() {
-            let most = SPARE_BUFFERS_PER_THREAD * rayon::current_num_threads();
-            let room = most.saturating_sub(spare.len());
-            spare.extend(buffers.into_iter().take(room));
-        }
-    }
-}
-
 impl<'a> Film for AdjointFilm<'a> {
     type Tile = AdjointTile<'a>;
 
@@ -166,8 +160,7 @@ impl<'a> Film for AdjointFilm<'a> {
             mark: Mark::default(),
             sum: Rev::zero(),
             shares: Vec::new(),
-            gradient: (self.buffers.lock().ok().and_then(|mut b| b.pop()))
-                .unwrap_or_else(|| zeroed_buffer(self.entries)),
+            gradient: zeroed_buffer(self.entries),
             touched: Vec::new(),
             invalid: 0,
             needed: self.needed.clone(),
@@ -182,9 +175,7 @@ impl<'a> Film for AdjointFilm<'a> {
             self.gradient[entry as usize] += g as f64;
         }
         self.invalid += tile.invalid;
-        if let Ok(mut buffers) = self.buffers.lock() {
-            buffers.push(tile.gradient);
-        }
+        spare_buffer(tile.gradient);
     }
 
     fn run_item<R>(&self, work: impl FnOnce() -> R) -> R {

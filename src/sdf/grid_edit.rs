@@ -275,7 +275,7 @@ fn spline_at_nodes(c: &[f32], out: &mut [f32]) {
 /// The sweeps run on a copy of `d` padded by one layer of `∞` on every side, so that every node has its
 /// six neighbours (a missing one counted as `∞`, as it was).
 fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
-    let [nx, ny, nz] = dims;
+    let [nx, ny, _] = dims;
     let index = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
     let mut p = super::grid::Padded::new(d, dims, f32::INFINITY);
     let h = [h.x, h.y, h.z];
@@ -284,39 +284,48 @@ fn fast_sweep(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: glam::Vec3) {
     // would compute the same value again, which cannot lower its own, so it is skipped (the same
     // result as visiting every node, in a fraction of the visits).
     let mut stale = vec![true; p.values.len()];
-    let order = |n: usize, flip: bool| (0..n).map(move |i| if flip { n - 1 - i } else { i });
     for _round in 0..4 {
         let mut changed = false;
-        for dir in 0..8 {
-            for z in order(nz, dir & 4 != 0) {
-                for y in order(ny, dir & 2 != 0) {
-                    for x in order(nx, dir & 1 != 0) {
-                        let i = p.index(x, y, z);
-                        if !stale[i] || frozen[index(x, y, z)] {
-                            continue;
-                        }
-                        stale[i] = false;
-                        let v = &mut p.values;
-                        let near =
-                            [0, 1, 2].map(|a| (v[i - stride[a]].min(v[i + stride[a]]), h[a]));
-                        let u = godunov(near);
-                        if u < v[i] {
-                            v[i] = u;
-                            changed = true;
-                            for a in 0..3 {
-                                stale[i - stride[a]] = true;
-                                stale[i + stride[a]] = true;
-                            }
-                        }
-                    }
+        sweep_orders(dims, |x, y, z| {
+            let i = p.index(x, y, z);
+            if !stale[i] || frozen[index(x, y, z)] {
+                return;
+            }
+            stale[i] = false;
+            let v = &mut p.values;
+            let near = [0, 1, 2].map(|a| (v[i - stride[a]].min(v[i + stride[a]]), h[a]));
+            let u = godunov(near);
+            if u < v[i] {
+                v[i] = u;
+                changed = true;
+                for a in 0..3 {
+                    stale[i - stride[a]] = true;
+                    stale[i + stride[a]] = true;
                 }
             }
-        }
+        });
         if !changed {
             break;
         }
     }
     d.copy_from_slice(&p.unpadded());
+}
+
+/// Visits every node of a lattice of `dims` in each of fast sweeping's eight orders in turn (x, y
+/// and z each ascending or descending; x fastest).
+#[inline(always)]
+fn sweep_orders(dims: [usize; 3], mut visit: impl FnMut(usize, usize, usize)) {
+    let [nx, ny, nz] = dims;
+    let order = |n: usize, flip: bool| (0..n).map(move |i| if flip { n - 1 - i } else { i });
+    for dir in 0..8 {
+        for z in order(nz, dir & 4 != 0) {
+            for y in order(ny, dir & 2 != 0) {
+                for x in order(nx, dir & 1 != 0) {
+                    visit(x, y, z);
+                }
+            }
+        }
+    }
 }
 
 /// The upwind solution `u` of `Σ_k ((u − a_k)⁺ / h_k)² = 1` for each axis's smaller neighbour value
@@ -363,41 +372,34 @@ mod tests {
     /// Fast sweeping that visits every node in every sweep: what [`fast_sweep`]'s skipping must
     /// reproduce bit for bit.
     fn sweep_every_node(d: &mut [f32], frozen: &[bool], dims: [usize; 3], h: [f32; 3]) {
-        let [nx, ny, nz] = dims;
+        let [nx, ny, _] = dims;
         let at = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
-        let order = |n: usize, flip: bool| (0..n).map(move |i| if flip { n - 1 - i } else { i });
         for _round in 0..4 {
             let mut changed = false;
-            for dir in 0..8 {
-                for z in order(nz, dir & 4 != 0) {
-                    for y in order(ny, dir & 2 != 0) {
-                        for x in order(nx, dir & 1 != 0) {
-                            let i = at(x, y, z);
-                            if frozen[i] {
-                                continue;
-                            }
-                            let c = [x, y, z];
-                            let near = [0, 1, 2].map(|a| {
-                                let mut m = f32::INFINITY;
-                                for side in [-1isize, 1] {
-                                    let k = c[a] as isize + side;
-                                    if k >= 0 && (k as usize) < dims[a] {
-                                        let mut n = c;
-                                        n[a] = k as usize;
-                                        m = m.min(d[at(n[0], n[1], n[2])]);
-                                    }
-                                }
-                                (m, h[a])
-                            });
-                            let u = godunov(near);
-                            if u < d[i] {
-                                d[i] = u;
-                                changed = true;
-                            }
+            sweep_orders(dims, |x, y, z| {
+                let i = at(x, y, z);
+                if frozen[i] {
+                    return;
+                }
+                let c = [x, y, z];
+                let near = [0, 1, 2].map(|a| {
+                    let mut m = f32::INFINITY;
+                    for side in [-1isize, 1] {
+                        let k = c[a] as isize + side;
+                        if k >= 0 && (k as usize) < dims[a] {
+                            let mut n = c;
+                            n[a] = k as usize;
+                            m = m.min(d[at(n[0], n[1], n[2])]);
                         }
                     }
+                    (m, h[a])
+                });
+                let u = godunov(near);
+                if u < d[i] {
+                    d[i] = u;
+                    changed = true;
                 }
-            }
+            });
             if !changed {
                 break;
             }

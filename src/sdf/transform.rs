@@ -360,17 +360,13 @@ impl Similarity<f32> {
     /// Divides by `s` where [`Similarity::to_child_point`] multiplies by `1/s`: the two can differ in the
     /// last bit, and the closed-form crossings ([`Sdf::line_crossings`]) have always divided.
     pub fn to_child_ray(&self, ray: &Ray) -> Ray {
-        let back = |v: glam::Vec3| -> glam::Vec3 { self.rotate_back(v.into()).into() };
-        let s = self.scale();
-        Ray::new(
-            back(ray.o - glam::Vec3::from(self.translate)) / s,
-            back(ray.d) / s,
-        )
+        let (o, d) = self.to_child_ray_lanes(ray.o.to_array(), ray.d.to_array());
+        Ray::new(o.into(), d.into())
     }
 
-    /// [`Similarity::to_child_ray`] of rays whose coordinates are of type `T` (eight rays in the
-    /// lanes of `wide::f32x8`): the same operations in the same order, so each lane's ray is that
-    /// ray's [`Similarity::to_child_ray`] bit for bit.
+    /// [`Similarity::to_child_ray`] of rays whose coordinates are of type `T`: `f32` for one ray,
+    /// `wide::f32x8` for eight rays in SIMD lanes, with the same operations in the same order, so
+    /// each lane's ray is that ray's [`Similarity::to_child_ray`] bit for bit.
     pub fn to_child_ray_lanes<T>(&self, o: [T; 3], d: [T; 3]) -> ([T; 3], [T; 3])
     where
         T: Copy

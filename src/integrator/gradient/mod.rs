@@ -265,7 +265,7 @@ fn gradient_with_image(
     stats.samples = spp as u64 * w as u64 * h as u64;
     stats.seconds = start.elapsed().as_secs_f64();
     Ok(Gradient {
-        interior: std::mem::take(&mut interior_film.gradient),
+        interior: interior_film.gradient,
         primary,
         secondary,
         stats,
