@@ -431,6 +431,27 @@ fn inverse_examples_load() {
     assert!(count >= 3, "{count} examples");
 }
 
+/// The race's second target (`opt_torus.json`) loads and keeps the race's settings: every field but
+/// the description and the target is `opt.json`'s, so a change to the race's schedule reaches both.
+#[test]
+fn the_race_with_the_torus_is_the_race_with_another_target() {
+    let race = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/inverse/race");
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(race.join(name)).unwrap()).unwrap()
+    };
+    let (mut race_json, mut torus_json) = (read("opt.json"), read("opt_torus.json"));
+    assert_eq!(torus_json["target"]["scene"], "torus_target.json");
+    for json in [&mut race_json, &mut torus_json] {
+        let object = json.as_object_mut().unwrap();
+        object.remove("description");
+        object.remove("target");
+    }
+    assert_eq!(race_json, torus_json);
+    let cfg = implicit_psdr::optimize::config::OptimizeConfig::load(&race.join("opt_torus.json"))
+        .unwrap_or_else(|e| panic!("opt_torus.json: {e}"));
+    assert_eq!(cfg.views.len(), 12);
+}
+
 /// Left out of `OPT.json`, `image_scale` is `"auto"` when only SDF grids (and named parameters) are
 /// optimised, and full resolution when a texture or an environment map is (their texels are seen
 /// at the film's resolution): on the race, whose 16³ cells project to about 6 pixels, the first
